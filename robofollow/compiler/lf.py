@@ -1,0 +1,224 @@
+"""Logical forms: what an instruction means, as typed, frozen, canonical values.
+
+Canonical by construction: a referring expression's constraints and a route's waypoints are
+sets (sorted and deduplicated whenever a value is built), so two phrasings with one meaning
+build equal values and byte-identical JSON.
+
+Referring expressions nest one level: a relation's landmark ("the block to the right of *the
+red ball*") is described by its own words only (colour, size, extremes, negations), never by a
+further relation. A destination or push target may carry relations ("behind the block that is
+to the left of the green ball").
+"""
+
+from __future__ import annotations
+
+from typing import Annotated, Literal, Union
+
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, field_validator
+
+Noun = Literal["object", "block", "cube", "cylinder", "sphere", "slab", "bowl", "label", "table"]
+Color = Literal["red", "green", "blue", "yellow", "orange", "purple", "pink", "white", "black",
+                "gray", "brown"]
+Size = Literal["larger", "smaller"]
+Extreme = Literal["leftmost", "rightmost", "frontmost", "backmost"]
+Relation = Literal["left_of", "right_of", "in_front_of", "behind", "on", "in", "next_to",
+                   "touching"]
+PlaceRelation = Literal["left_of", "right_of", "in_front_of", "behind", "on", "in", "next_to"]
+Arm = Literal["left", "right"]
+Side = Literal["short", "long"]
+Facing = Literal["front", "back", "left", "right"]
+
+
+class Node(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+
+# ---------------------------------------------------------------- referring expressions
+class ColorIs(Node):
+    type: Literal["color"] = "color"
+    color: Color
+    negated: bool = False
+
+
+class SizeIs(Node):
+    """Comparative size among the candidates that match the rest of the description."""
+
+    type: Literal["size"] = "size"
+    size: Size
+
+
+class ExtremeIs(Node):
+    """Leftmost / rightmost / ... among the candidates that match the rest of the description."""
+
+    type: Literal["extreme"] = "extreme"
+    extreme: Extreme
+    negated: bool = False
+
+
+class NotKind(Node):
+    """'that is not a cube'. A positive kind is the noun itself."""
+
+    type: Literal["not_kind"] = "not_kind"
+    noun: Noun
+
+
+class Related(Node):
+    type: Literal["relation"] = "relation"
+    relation: Relation
+    landmark: Ref
+    negated: bool = False
+
+    @field_validator("landmark")
+    @classmethod
+    def _landmark_is_simple(cls, landmark: Ref) -> Ref:
+        if not landmark.is_simple:
+            raise ValueError("a relation's landmark cannot itself be described by a relation")
+        return landmark
+
+
+Constraint = Annotated[Union[ColorIs, SizeIs, ExtremeIs, NotKind, Related],
+                       Field(discriminator="type")]
+
+_CONSTRAINT_ORDER = {"color": 0, "size": 1, "extreme": 2, "not_kind": 3, "relation": 4}
+
+
+def _canonical_set(items: tuple, order=lambda item: 0) -> tuple:
+    """Sort and deduplicate by canonical JSON, so equal sets give equal tuples."""
+    if len(items) < 2:
+        return tuple(items)
+    unique = {item.model_dump_json(): item for item in items}
+    return tuple(unique[key] for key in sorted(unique, key=lambda k: (order(unique[k]), k)))
+
+
+class Ref(Node):
+    """A referring expression: a noun and a conjunction of constraints."""
+
+    noun: Noun
+    constraints: tuple[Constraint, ...] = ()
+
+    @field_validator("constraints")
+    @classmethod
+    def _canonical(cls, constraints: tuple) -> tuple:
+        return _canonical_set(constraints, lambda c: _CONSTRAINT_ORDER[c.type])
+
+    @property
+    def is_simple(self) -> bool:
+        return not any(isinstance(c, Related) for c in self.constraints)
+
+
+Related.model_rebuild()
+
+
+# ---------------------------------------------------------------- actions
+class Placement(Node):
+    relation: PlaceRelation
+    landmark: Ref
+
+
+class Waypoint(Node):
+    """A route constraint: carry the object over ("via") or not over ("avoid") a landmark."""
+
+    mode: Literal["via", "avoid"]
+    landmark: Ref
+
+    @field_validator("landmark")
+    @classmethod
+    def _landmark_is_simple(cls, landmark: Ref) -> Ref:
+        if not landmark.is_simple:
+            raise ValueError("a waypoint's landmark cannot be described by a relation")
+        return landmark
+
+
+class Orientation(Node):
+    """Final orientation: 'with the <side> side facing <facing>'."""
+
+    side: Side
+    facing: Facing
+
+
+class Pick(Node):
+    type: Literal["pick"] = "pick"
+    arm: Arm | None = None
+    object: Ref
+
+
+class Place(Node):
+    type: Literal["place"] = "place"
+    arm: Arm | None = None
+    object: Ref
+    destination: Placement
+    route: tuple[Waypoint, ...] = ()
+    orientation: Orientation | None = None
+
+    @field_validator("route")
+    @classmethod
+    def _canonical_route(cls, route: tuple) -> tuple:
+        return _canonical_set(route)
+
+
+class Push(Node):
+    type: Literal["push"] = "push"
+    arm: Arm | None = None
+    object: Ref
+    toward: Ref
+
+
+Command = Annotated[Union[Pick, Place, Push], Field(discriminator="type")]
+
+
+class Sequence(Node):
+    """Commands done in order."""
+
+    type: Literal["sequence"] = "sequence"
+    steps: tuple[Command, ...] = Field(min_length=2)
+
+
+Body = Annotated[Union[Pick, Place, Push, Sequence], Field(discriminator="type")]
+
+
+# ---------------------------------------------------------------- conditions
+class Exists(Node):
+    """'there is an object in the bowl' (negated: 'the bowl is empty')."""
+
+    type: Literal["exists"] = "exists"
+    ref: Ref
+    negated: bool = False
+
+
+class Holds(Node):
+    """'the blue sphere is (not) to the right of the red sphere': a property of one referent."""
+
+    type: Literal["holds"] = "holds"
+    subject: Ref
+    property: Constraint
+
+
+Condition = Annotated[Union[Exists, Holds], Field(discriminator="type")]
+
+
+class Conditional(Node):
+    type: Literal["conditional"] = "conditional"
+    condition: Condition
+    then: Body
+    otherwise: Body | None = None
+
+
+Instruction = Annotated[Union[Pick, Place, Push, Sequence, Conditional],
+                        Field(discriminator="type")]
+
+_INSTRUCTION = TypeAdapter(Instruction)
+
+
+def to_json(lf: Instruction, indent: int | None = None) -> str:
+    """Canonical JSON: the same meaning always gives the same bytes."""
+    return lf.model_dump_json(indent=indent)
+
+
+def from_json(data: str | bytes) -> Instruction:
+    """Read a logical form back from JSON (validated, canonicalised)."""
+    return _INSTRUCTION.validate_json(data)
+
+
+def from_dict(data: dict) -> Instruction:
+    return _INSTRUCTION.validate_python(data)
+

@@ -1,0 +1,501 @@
+"""Syntax records -> canonical logical forms.
+
+Decides what the grammar leaves open, by these documented rules:
+
+* Modifier chains are flat: every link after an object describes that object, except
+  - the destination of a transport verb (place/put/stack/move/take/remove): the *last*
+    relation phrase after a noun phrase object, or the *first* one after 'it' (which takes no
+    description); links after the destination describe the destination's landmark;
+  - 'towards X' of push: links after it describe X;
+  - route phrases ('over X', 'around X'), which constrain the carried object's path.
+* Clauses group into steps: an action on 'it' (or 'that <noun>') continues the current step
+  ("pick up X, pass over Y, then place it on Z" is one placement); an action on a new noun
+  phrase starts a new step, and several steps make a sequence. 'before <gerund>' adds a later
+  step, 'after <gerund>' an earlier one.
+* An arm phrase before the first action sets the arm of every step; 'use your left arm to'
+  leads one action; elsewhere an arm phrase names the arm of the step it follows.
+* 'it' in a route ("detour to avoid passing over it") is the route's last landmark; elsewhere
+  it is the object being handled, or in a conditional branch, what the condition mentions.
+* 'one' stands for the noun of 'among the <nouns>' (else 'object'); 'from/off X' means on X
+  (in X for a container); positive 'is a <noun>' narrows the noun.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from robofollow.compiler import lf
+from robofollow.compiler.syntax import (
+    NP, PP, Action, Among, ArmPhrase, Break, ConditionalPhrase, ConditionPhrase, It, Link,
+    OrientationPhrase, Predicate, Region, RoutePhrase, Steps,
+)
+from robofollow.errors import UnsupportedConstructError
+
+_NOUN_PARENTS = {"cube": "block", "slab": "block"}
+_CONTAINERS = frozenset({"bowl"})
+_TRANSPORT_VERBS = frozenset({"place", "stack", "move", "take", "remove"})
+_DESTINATION_REQUIRED = frozenset({"place", "stack"})
+_PLACE_RELATIONS = frozenset(lf.PlaceRelation.__args__)
+_SIDE_RELATIONS = {"left": "left_of", "right": "right_of"}
+_SIDE_EXTREMES = {"left": "leftmost", "right": "rightmost"}
+
+# (preposition, target shape) -> (meaning kind, relation or mode)
+_NP_PREPOSITIONS = {
+    "on": ("relation", "on"), "in": ("relation", "in"), "inside": ("relation", "in"),
+    "behind": ("relation", "behind"), "beside": ("relation", "next_to"),
+    "next_to": ("relation", "next_to"), "touching": ("relation", "touching"),
+    "into": ("destination", "in"), "onto": ("destination", "on"), "to": ("destination", "on"),
+    "from": ("source", None), "off": ("source", None), "out_of": ("source", "in"),
+    "over": ("route", "via"), "via": ("route", "via"), "around": ("route", "avoid"),
+    "towards": ("toward", None),
+}
+_REGION_PREPOSITIONS = {
+    ("side", "on"): "extreme", ("side", "at"): "extreme",
+    ("extreme_position", "in"): "extreme", ("extreme_position", "at"): "extreme",
+    ("side_of", "to"): "relation", ("side_of", "on"): "relation", ("side_of", "at"): "relation",
+    ("top_of", "on"): "relation", ("top_of", "onto"): "destination",
+    ("top_of", "to"): "destination", ("top_of", "from"): "source", ("top_of", "off"): "source",
+    ("front_of", "in"): "relation", ("direction_of", "in"): "toward",
+    ("position", "at"): "position", ("position", "to"): "position", ("position", "in"): "position",
+}
+
+
+@dataclass(slots=True)
+class Meaning:
+    """What one link of a modifier chain says."""
+
+    kind: str  # relation, destination, source, extreme, route, toward, constraint, noun, particle
+    column: int
+    relation: str | None = None
+    landmark: lf.Ref | It | None = None
+    constraint: object = None
+    noun: str | None = None
+    negated: bool = False
+
+
+@dataclass(slots=True)
+class Draft:
+    """A step under construction."""
+
+    object: lf.Ref
+    column: int
+    kind: str = "hold"  # hold (picked, maybe to be placed), place, push
+    arm: str | None = None
+    destination: lf.Placement | None = None
+    toward: lf.Ref | None = None
+    route: list[lf.Waypoint] = field(default_factory=list)
+    route_column: int = 0
+    orientation: lf.Orientation | None = None
+    orientation_column: int = 0
+    last_landmark: lf.Ref | None = None
+    earlier: bool = False  # 'after <gerund>': this step goes before the previous one
+
+
+class Semantics:
+    """One instruction's semantic pass (holds the text for error messages)."""
+
+    def __init__(self, text: str):
+        self.text = text
+
+    def fail(self, column: int, message: str) -> UnsupportedConstructError:
+        return UnsupportedConstructError(message, text=self.text, column=column,
+                                         length=self._word_length(column))
+
+    def _word_length(self, column: int) -> int:
+        rest = self.text[column - 1:]
+        length = len(rest) - len(rest.lstrip("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ-'"))
+        return max(length, 1)
+
+    # ---------------------------------------------------------------- entry
+    def instruction(self, syntax) -> lf.Instruction:
+        if isinstance(syntax, ConditionalPhrase):
+            return self.conditional(syntax)
+        return self.steps(syntax, focus=None)
+
+    def conditional(self, phrase: ConditionalPhrase) -> lf.Conditional:
+        condition, entity = self.condition(phrase.condition)
+        if phrase.negate_condition:
+            condition = self.negate(condition, phrase.column)
+        then = self.steps(phrase.then, focus=entity)
+        otherwise = self.steps(phrase.otherwise, focus=entity) if phrase.otherwise else None
+        return lf.Conditional(condition=condition, then=then, otherwise=otherwise)
+
+    # ---------------------------------------------------------------- conditions
+    def condition(self, phrase: ConditionPhrase) -> tuple[lf.Condition, lf.Ref]:
+        subject = self.describe(phrase.subject, self.meanings(phrase.chain))
+        if phrase.kind == "there_is":
+            return lf.Exists(ref=subject, negated=phrase.negated), subject
+        if phrase.kind in ("contains", "has_on_top"):
+            relation = "in" if phrase.kind == "contains" else "on"
+            content = self.describe(phrase.predicate, [
+                Meaning("relation", phrase.column, relation, self.landmark(subject, phrase))])
+            return lf.Exists(ref=content, negated=phrase.negated), content
+        predicate = phrase.predicate
+        if isinstance(predicate, Predicate) and predicate.kind == "empty":
+            content = lf.Ref(noun="object", constraints=(
+                lf.Related(relation="in", landmark=self.landmark(subject, phrase)),))
+            claims_empty = not predicate.value
+            return lf.Exists(ref=content, negated=claims_empty != phrase.negated), content
+        meaning = self.predicate(predicate, phrase.negated, phrase.column)
+        if meaning.kind != "constraint":
+            raise self.fail(phrase.column, "a condition can test a relation, colour, size or "
+                                           "position of an object, not what kind it is")
+        return lf.Holds(subject=subject, property=meaning.constraint), subject
+
+    def landmark(self, ref: lf.Ref, phrase: ConditionPhrase) -> lf.Ref:
+        if not ref.is_simple:
+            raise self.fail(phrase.column, "describe this container without a relation "
+                                           "(relations do not nest)")
+        return ref
+
+    def negate(self, condition: lf.Condition, column: int) -> lf.Condition:
+        if isinstance(condition, lf.Exists):
+            return condition.model_copy(update={"negated": not condition.negated})
+        prop = condition.property
+        if not hasattr(prop, "negated"):
+            raise self.fail(column, "'unless' cannot negate this condition; use 'if'")
+        flipped = prop.model_copy(update={"negated": not prop.negated})
+        return lf.Holds(subject=condition.subject, property=flipped)
+
+    # ---------------------------------------------------------------- steps
+    def steps(self, steps: Steps, focus: lf.Ref | None) -> lf.Body:
+        drafts: list[Draft] = []
+        current: Draft | None = None
+        default_arm: str | None = None
+        domain: lf.Ref | None = None
+        after_break = True
+        segments = steps.segments
+        for index, segment in enumerate(segments):
+            following = segments[index + 1] if index + 1 < len(segments) else None
+            if isinstance(segment, Break):
+                after_break = True
+                continue
+            if isinstance(segment, Among):
+                domain = lf.Ref(noun=segment.noun,
+                                constraints=tuple(self.premod(p) for p in segment.premods))
+            elif isinstance(segment, ArmPhrase):
+                if current is None and not drafts:
+                    default_arm = segment.side
+                elif after_break and isinstance(following, Action):
+                    following.lead_arm = segment
+                else:
+                    self.set_arm(current, segment)
+            elif isinstance(segment, Action):
+                current, started = self.action(segment, current, focus, domain)
+                if started is not None:
+                    drafts.append(started)
+                focus = current.object
+            elif isinstance(segment, RoutePhrase):
+                self.route(segment, current)
+            elif isinstance(segment, OrientationPhrase):
+                self.orientation(segment, current)
+            after_break = False
+        if current is None:
+            raise self.fail(steps.column, "no action: say what to do (pick up, place, push ...)")
+        body = [self.command(draft, default_arm) for draft in self.ordered(drafts)]
+        return body[0] if len(body) == 1 else lf.Sequence(steps=tuple(body))
+
+    @staticmethod
+    def ordered(drafts: list[Draft]) -> list[Draft]:
+        result: list[Draft] = []
+        for draft in drafts:
+            result.insert(len(result) - 1 if draft.earlier and result else len(result), draft)
+        return result
+
+    def set_arm(self, draft: Draft | None, arm: ArmPhrase) -> None:
+        if draft is None:
+            raise self.fail(arm.column, "this arm phrase belongs to no action")
+        if draft.arm is not None and draft.arm != arm.side:
+            raise self.fail(arm.column, f"two arms named for one action ({draft.arm} and "
+                                        f"{arm.side})")
+        draft.arm = arm.side
+
+    def action(self, action: Action, current: Draft | None, focus: lf.Ref | None,
+               domain: lf.Ref | None) -> tuple[Draft, Draft | None]:
+        """Apply an action clause; returns (the current draft, the draft it started or None)."""
+        meanings = self.meanings(action.chain)
+        anaphoric = isinstance(action.obj, It) or action.obj.det == "that"
+        referent = current.object if current is not None else focus
+        if anaphoric and referent is None:
+            raise self.fail(action.obj.column, "'it' / 'that' does not refer to anything here")
+        described, destination, toward, route = self.split_chain(action, meanings)
+        if anaphoric:
+            obj = self.resolve_anaphor(action.obj, referent, described)
+        else:
+            obj = self.describe(action.obj, described, domain)
+        continues = (anaphoric and current is not None and current.kind == "hold"
+                     and obj == current.object and toward is None and action.marker is None)
+        started = None
+        if not continues:
+            current = started = Draft(object=obj, column=action.column,
+                                      earlier=action.marker == "after")
+        if destination is not None:
+            current.destination, current.kind = destination, "place"
+        if toward is not None:
+            current.toward, current.kind = toward, "push"
+        for waypoint_meaning in route:
+            self.add_waypoint(current, waypoint_meaning.relation, waypoint_meaning.landmark,
+                              waypoint_meaning.column)
+        if action.lead_arm is not None:
+            self.set_arm(current, action.lead_arm)
+        return current, started
+
+    def split_chain(self, action: Action, meanings: list[Meaning]):
+        """Split a chain into (object modifiers, destination, push target, route links)."""
+        route = [m for m in meanings if m.kind == "route"]
+        links = [m for m in meanings if m.kind != "route"]
+        for m in links:
+            if m.kind == "particle" and action.verb != "pick":
+                raise self.fail(m.column, "'up' goes with 'pick'")
+        links = [m for m in links if m.kind != "particle"]
+        pronoun = isinstance(action.obj, It)
+        destination = toward = None
+        if action.verb == "push":
+            targets = [i for i, m in enumerate(links) if m.kind == "toward"]
+            if len(targets) != 1:
+                raise self.fail(action.column, "say which way to push: 'towards X' or "
+                                               "'in the direction of X'")
+            at = targets[0]
+            toward = self.extend(links[at].landmark, links[at + 1:])
+            links = links[:at]
+        elif action.verb in _TRANSPORT_VERBS:
+            candidates = [i for i, m in enumerate(links)
+                          if m.kind in ("relation", "destination") and not m.negated]
+            if candidates:
+                at = candidates[0] if pronoun else candidates[-1]
+                chosen = links[at]
+                if chosen.relation not in _PLACE_RELATIONS:
+                    raise self.fail(chosen.column, f"cannot place an object "
+                                                   f"'{chosen.relation.replace('_', ' ')}' "
+                                                   "something")
+                landmark = self.extend(chosen.landmark, links[at + 1:])
+                destination = lf.Placement(relation=chosen.relation, landmark=landmark)
+                links = links[:at]
+            elif action.verb in _DESTINATION_REQUIRED:
+                raise self.fail(action.column, "say where to put it (e.g. 'on the red cube', "
+                                               "'behind the bowl')")
+        for m in links:
+            if m.kind in ("destination", "toward"):
+                word = "a destination" if m.kind == "destination" else "a push direction"
+                raise self.fail(m.column, f"{word} does not fit here")
+        if pronoun and links:
+            raise self.fail(links[0].column, "'it' cannot be described further; describe the "
+                                             "object where it is first named")
+        return links, destination, toward, route
+
+    def resolve_anaphor(self, obj: NP | It, referent: lf.Ref, described: list[Meaning]) -> lf.Ref:
+        if isinstance(obj, It):
+            return referent
+        if obj.premods or described:
+            raise self.fail(obj.column, "'that <noun>' takes no further description")
+        noun = self.narrower(referent.noun, self.head_noun(obj, None))
+        if noun is None:
+            raise self.fail(obj.column, f"'that {obj.head}' cannot be the {referent.noun} "
+                                        "mentioned before")
+        return referent.model_copy(update={"noun": noun})
+
+    def add_waypoint(self, draft: Draft, mode: str, landmark: lf.Ref | It, column: int) -> None:
+        if draft.kind == "push":
+            raise self.fail(column, "a push has no route; routes constrain a carried object")
+        if isinstance(landmark, It):
+            if draft.last_landmark is None:
+                raise self.fail(landmark.column, "'it' does not refer to a route landmark here")
+            landmark = draft.last_landmark
+        draft.route.append(lf.Waypoint(mode=mode, landmark=landmark))
+        draft.last_landmark = landmark
+        draft.route_column = draft.route_column or column
+
+    def route(self, phrase: RoutePhrase, draft: Draft | None) -> None:
+        if draft is None:
+            raise self.fail(phrase.column, "a route needs an object: pick something up first")
+        for negated, part in phrase.parts:
+            if isinstance(part, PP):
+                meaning = self.pp(part)
+                if meaning.kind != "route":
+                    raise self.fail(part.column, "a route goes 'over X' or 'around X'")
+                mode, landmark = meaning.relation, meaning.landmark
+            elif isinstance(part, (NP, It)):
+                mode = "via"
+                landmark = part if isinstance(part, It) else self.simple(part)
+            else:
+                raise self.fail(part.column, "a route goes 'over X' or 'around X'")
+            if negated:
+                if mode == "avoid":
+                    raise self.fail(phrase.column, "a negated detour has no meaning here")
+                mode = "avoid"
+            self.add_waypoint(draft, mode, landmark, phrase.column)
+
+    def orientation(self, phrase: OrientationPhrase, draft: Draft | None) -> None:
+        if draft is None or draft.kind == "push":
+            raise self.fail(phrase.column, "an orientation needs an object to place")
+        value = lf.Orientation(side=phrase.side, facing=phrase.facing)
+        if draft.orientation is not None and draft.orientation != value:
+            raise self.fail(phrase.column, "two different orientations for one placement")
+        draft.orientation, draft.orientation_column = value, phrase.column
+
+    def command(self, draft: Draft, default_arm: str | None) -> lf.Pick | lf.Place | lf.Push:
+        arm = draft.arm or default_arm
+        if draft.kind == "push":
+            return lf.Push(arm=arm, object=draft.object, toward=draft.toward)
+        if draft.kind == "place":
+            return lf.Place(arm=arm, object=draft.object, destination=draft.destination,
+                            route=tuple(draft.route), orientation=draft.orientation)
+        if draft.route:
+            raise self.fail(draft.route_column, "a route needs a destination: say where to "
+                                                "place the object")
+        if draft.orientation is not None:
+            raise self.fail(draft.orientation_column, "an orientation needs a destination: say "
+                                                      "where to place the object")
+        return lf.Pick(arm=arm, object=draft.object)
+
+    # ---------------------------------------------------------------- referring expressions
+    def narrower(self, a: str, b: str) -> str | None:
+        """The more specific of two nouns, or None when they cannot name one object."""
+        if a == b or b == "object" or _NOUN_PARENTS.get(a) == b:
+            return a
+        if a == "object" or _NOUN_PARENTS.get(b) == a:
+            return b
+        return None
+
+    @staticmethod
+    def head_noun(np: NP, domain: lf.Ref | None) -> str:
+        if np.head == "one":
+            return domain.noun if domain is not None else "object"
+        return np.head
+
+    def premod(self, premod) -> lf.ColorIs | lf.SizeIs | lf.ExtremeIs | lf.NotKind:
+        if premod.kind == "color":
+            return lf.ColorIs(color=premod.value, negated=premod.negated)
+        if premod.kind == "size":
+            return lf.SizeIs(size=premod.value)
+        if premod.kind == "extreme":
+            return lf.ExtremeIs(extreme=premod.value, negated=premod.negated)
+        return lf.NotKind(noun=premod.value)
+
+    def describe(self, np: NP, meanings: list[Meaning], domain: lf.Ref | None = None) -> lf.Ref:
+        """A noun phrase plus the chain links that describe it."""
+        if np.det == "that":
+            raise self.fail(np.column, "'that <noun>' refers back to an object; none is "
+                                       "mentioned before it")
+        base = lf.Ref(noun=self.head_noun(np, domain),
+                      constraints=tuple(self.premod(p) for p in np.premods)
+                      + (domain.constraints if np.head == "one" and domain else ()))
+        return self.extend(base, meanings)
+
+    def simple(self, np: NP) -> lf.Ref:
+        """A landmark: a noun phrase described by its own words only."""
+        if np.det in ("that", "no"):
+            raise self.fail(np.column, f"'{np.det}' cannot introduce a landmark")
+        return self.describe(np, [])
+
+    def extend(self, ref: lf.Ref, meanings: list[Meaning]) -> lf.Ref:
+        noun, constraints = ref.noun, list(ref.constraints)
+        for m in meanings:
+            if m.kind in ("relation", "source"):
+                constraints.append(lf.Related(relation=m.relation, landmark=m.landmark,
+                                              negated=m.negated))
+            elif m.kind == "extreme":
+                constraints.append(lf.ExtremeIs(extreme=m.relation, negated=m.negated))
+            elif m.kind == "constraint":
+                constraints.append(m.constraint)
+            elif m.kind == "noun":
+                narrowed = self.narrower(noun, m.noun)
+                if narrowed is None:
+                    raise self.fail(m.column, f"a {noun} cannot be a {m.noun}")
+                noun = narrowed
+                constraints.extend(m.constraint)
+            else:
+                raise self.fail(m.column, "this phrase cannot describe an object")
+        return lf.Ref(noun=noun, constraints=tuple(constraints))
+
+    # ---------------------------------------------------------------- chain links
+    def meanings(self, chain: list[Link]) -> list[Meaning]:
+        result = []
+        for link in chain:
+            if link.kind == "particle":
+                result.append(Meaning("particle", link.column))
+            elif link.kind == "pp":
+                meaning = self.pp(link.value)
+                if link.negated:
+                    if meaning.kind not in ("relation", "extreme"):
+                        raise self.fail(link.column, "only a relation or a position can be "
+                                                     "negated here")
+                    meaning.negated = True
+                    meaning.column = link.column
+                result.append(meaning)
+            else:
+                result.append(self.predicate(link.value, link.negated, link.column))
+        return result
+
+    def predicate(self, predicate, negated: bool, column: int) -> Meaning:
+        """'(not) red', '(not) a cube', '(not) in the bowl', 'right of X' ... as one meaning."""
+        if isinstance(predicate, Region):
+            predicate = Predicate("pp", PP("at", predicate, predicate.column), predicate.column)
+        kind, value = predicate.kind, predicate.value
+        if kind == "pp":
+            meaning = self.pp(value)
+            if meaning.kind == "source":
+                meaning.kind = "relation"
+            if meaning.kind not in ("relation", "extreme"):
+                raise self.fail(value.column, "this phrase cannot describe an object")
+            constraint = (lf.Related(relation=meaning.relation, landmark=meaning.landmark,
+                                     negated=negated) if meaning.kind == "relation" else
+                          lf.ExtremeIs(extreme=meaning.relation, negated=negated))
+        elif kind == "color":
+            constraint = lf.ColorIs(color=value, negated=negated)
+        elif kind == "extreme":
+            constraint = lf.ExtremeIs(extreme=value, negated=negated)
+        elif kind == "size":
+            if negated:
+                raise self.fail(column, "say 'larger' or 'smaller' instead of negating a size")
+            constraint = lf.SizeIs(size=value)
+        elif kind == "kind":
+            if negated:
+                if value.premods:
+                    raise self.fail(column, "only a bare noun can be negated: 'not a cube'")
+                constraint = lf.NotKind(noun=value.head)
+            else:
+                return Meaning("noun", column, noun=value.head,
+                               constraint=[self.premod(p) for p in value.premods])
+        else:
+            raise self.fail(column, "'empty' describes a container in a condition")
+        return Meaning("constraint", column, constraint=constraint)
+
+    def pp(self, pp: PP) -> Meaning:
+        preposition, target = pp.preposition, pp.target
+        if isinstance(target, It):
+            if _NP_PREPOSITIONS.get(preposition, ("",))[0] != "route":
+                raise self.fail(target.column, "'it' can only name a route landmark here")
+            return Meaning("route", pp.column, _NP_PREPOSITIONS[preposition][1], target)
+        if isinstance(target, NP):
+            if preposition not in _NP_PREPOSITIONS:
+                raise self.fail(pp.column, f"'{preposition.replace('_', ' ')}' needs a "
+                                           "relation, e.g. 'at the position right of X'")
+            kind, relation = _NP_PREPOSITIONS[preposition]
+            landmark = self.simple(target)
+            if kind == "source" and relation is None:
+                relation = "in" if landmark.noun in _CONTAINERS else "on"
+            return Meaning(kind, pp.column, relation, landmark)
+        kind = _REGION_PREPOSITIONS.get((target.kind, preposition))
+        if kind is None:
+            raise self.fail(pp.column, f"'{preposition.replace('_', ' ')}' does not combine "
+                                       f"with this phrase")
+        if kind == "position":
+            inner = target.inner
+            meaning = self.pp(inner) if isinstance(inner, PP) else self.pp(
+                PP("to", inner, inner.column))
+            if meaning.kind != "relation":
+                raise self.fail(pp.column, "'the position' must be next to something, e.g. "
+                                           "'the position right of the blue sphere'")
+            meaning.column = pp.column
+            return meaning
+        if kind == "extreme":
+            extreme = (target.value if target.kind == "extreme_position"
+                       else _SIDE_EXTREMES[target.value])
+            return Meaning("extreme", pp.column, extreme)
+        landmark = self.simple(target.np)
+        relation = {"side_of": _SIDE_RELATIONS.get(target.value), "front_of": "in_front_of",
+                    "top_of": "on"}.get(target.kind)
+        if kind == "source":
+            relation = "on"
+        return Meaning(kind, pp.column, relation, landmark)

@@ -1,0 +1,393 @@
+"""Parse-tree rules -> small syntax records (applied inline while the LALR parser reduces).
+
+The records keep words, structure and columns; meaning is decided in semantics.py.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from lark import Token, Transformer
+
+# ---------------------------------------------------------------- records
+
+
+@dataclass(slots=True)
+class Premod:
+    kind: str  # color, size, extreme, kind
+    value: str
+    negated: bool
+    column: int
+
+
+@dataclass(slots=True)
+class Head:
+    noun: str  # a noun, or "one"
+    column: int
+
+
+@dataclass(slots=True)
+class NP:
+    det: str | None
+    premods: list[Premod]
+    head: str  # a noun, or "one"
+    column: int
+
+
+@dataclass(slots=True)
+class It:
+    column: int
+
+
+@dataclass(slots=True)
+class Region:
+    """A target that is not a plain noun phrase: 'the left side of X', 'top of X', ..."""
+
+    kind: str  # side, side_of, extreme_position, top_of, front_of, direction_of, position
+    value: str | None  # left/right or an extreme
+    np: NP | None
+    inner: PP | Region | None  # for 'the position <pp>'
+    column: int
+
+
+@dataclass(slots=True)
+class PP:
+    preposition: str
+    target: NP | It | Region
+    column: int
+
+
+@dataclass(slots=True)
+class Predicate:
+    """What follows 'that is' / 'is' / 'and': a pp, a bare region, a colour, ... ."""
+
+    kind: str  # pp, region, color, size, extreme, kind, empty
+    value: object
+    column: int
+
+
+@dataclass(slots=True)
+class Link:
+    """One element of a modifier chain."""
+
+    kind: str  # pp, predicate, particle
+    value: PP | Predicate | None
+    negated: bool
+    column: int
+
+
+@dataclass(slots=True)
+class Action:
+    verb: str
+    obj: NP | It
+    chain: list[Link]
+    gerund: bool
+    column: int
+    lead_arm: ArmPhrase | None = None
+    marker: str | None = None  # before, after, start
+
+
+@dataclass(slots=True)
+class ArmPhrase:
+    side: str
+    column: int
+
+
+@dataclass(slots=True)
+class RoutePhrase:
+    parts: list[tuple[bool, PP | It | NP]]  # (negated, what follows the route verb)
+    column: int
+
+
+@dataclass(slots=True)
+class OrientationPhrase:
+    side: str
+    facing: str
+    column: int
+
+
+@dataclass(slots=True)
+class Among:
+    premods: list[Premod]
+    noun: str
+    column: int
+
+
+@dataclass(slots=True)
+class Break:
+    """A connective that starts a new sentence or a 'then' clause."""
+
+    column: int
+
+
+@dataclass(slots=True)
+class Steps:
+    segments: list
+    column: int
+
+
+@dataclass(slots=True)
+class ConditionPhrase:
+    kind: str  # there_is, is, contains, has_on_top
+    subject: NP
+    chain: list[Link]
+    negated: bool
+    predicate: Predicate | NP | None
+    column: int
+
+
+@dataclass(slots=True)
+class ConditionalPhrase:
+    condition: ConditionPhrase
+    then: Steps
+    otherwise: Steps | None
+    negate_condition: bool
+    column: int
+
+
+# ---------------------------------------------------------------- helpers
+
+_PREMOD_KINDS = {"COLOR": "color", "SIZE": "size", "EXTREME": "extreme", "NOUN": "kind"}
+_SIDE_EXTREMES = {"left": "leftmost", "right": "rightmost", "front": "frontmost",
+                  "back": "backmost"}
+
+
+def column_of(item) -> int:
+    """1-based column of a token or a record."""
+    return item.column
+
+
+def _tokens(children) -> list[Token]:
+    return [c for c in children if isinstance(c, Token)]
+
+
+def _has(children, terminal: str) -> bool:
+    return any(isinstance(c, Token) and c.type == terminal for c in children)
+
+
+def _first(children, kind):
+    return next((c for c in children if isinstance(c, kind)), None)
+
+
+def _premod(token: Token, negated: bool, column: int) -> Premod:
+    if token.type in _PREMOD_KINDS:
+        return Premod(_PREMOD_KINDS[token.type], token.value, negated, column)
+    return Premod("extreme", _SIDE_EXTREMES[token.value], negated, column)
+
+
+class ToSyntax(Transformer):
+    """Callbacks named after grammar rules and aliases."""
+
+    # ---- conditionals
+    def start(self, children):
+        return children[0]
+
+    def if_(self, children):
+        condition = _first(children, ConditionPhrase)
+        then, *otherwise = [c for c in children if isinstance(c, Steps)]
+        return ConditionalPhrase(condition, then, otherwise[0] if otherwise else None, False,
+                                 children[0].column)
+
+    def unless(self, children):
+        conditional = self.if_(children)
+        conditional.negate_condition = True
+        return conditional
+
+    def otherwise(self, children):
+        return _first(children, Steps)
+
+    def there_is(self, children):
+        np = _first(children, NP)
+        chain = _first(children, list) or []
+        return ConditionPhrase("there_is", np, chain, np.det == "no", None, children[0].column)
+
+    def is_(self, children):
+        return ConditionPhrase("is", children[0], _first(children, list) or [],
+                               _has(children, "NOT"), children[-1], children[0].column)
+
+    def _possession(self, kind, children):
+        subject, obj = [c for c in children if isinstance(c, NP)]
+        negated = _has(children, "NOT") or obj.det == "no"
+        return ConditionPhrase(kind, subject, _first(children, list) or [], negated, obj,
+                               subject.column)
+
+    def contains(self, children):
+        return self._possession("contains", children)
+
+    def has_on_top(self, children):
+        return self._possession("has_on_top", children)
+
+    def condition_predicate(self, children):
+        return children[0]
+
+    def empty(self, children):
+        return Predicate("empty", _has(children, "NON"), children[0].column)
+
+    # ---- clauses
+    def steps(self, children):
+        segments = [c for c in children if not isinstance(c, Token) and c is not None]
+        return Steps(segments, column_of(segments[0]))
+
+    def connective(self, children):
+        if _has(children, "THEN") or _has(children, "PERIOD") or _has(children, "SEMICOLON"):
+            return Break(children[0].column)
+        return None
+
+    def segment(self, children):
+        return children[0]
+
+    def arm_lead(self, children):
+        arm, action = children[0], children[-1]
+        action.lead_arm = arm
+        return action
+
+    def _marked(self, marker, children):
+        action = children[-1]
+        action.marker = marker
+        action.column = children[0].column
+        return action
+
+    def start_by(self, children):
+        return self._marked("start", children)
+
+    def before(self, children):
+        return self._marked("before", children)
+
+    def after(self, children):
+        return self._marked("after", children)
+
+    def among(self, children):
+        premods = [c for c in children if isinstance(c, Premod)]
+        return Among(premods, children[-1].value, children[0].column)
+
+    def action(self, children, gerund=False):
+        verb, obj = children[0], children[1]
+        chain = children[2] if len(children) > 2 else []
+        return Action(verb.value, obj, chain, gerund, verb.column)
+
+    def gerund_action(self, children):
+        return self.action(children, gerund=True)
+
+    def verb(self, children):
+        return children[0]
+
+    gerund = verb
+
+    def object(self, children):
+        child = children[0]
+        return It(child.column) if isinstance(child, Token) else child
+
+    def arm(self, children):
+        side = next(t for t in children if t.type in ("LEFT", "RIGHT"))
+        return ArmPhrase(side.value, children[0].column)
+
+    def route(self, children, negated=False):
+        parts = [c for c in children if not isinstance(c, Token)]
+        first = _tokens(children)[0]
+        marks = [negated] + [True] * (len(parts) - 1)  # "go around X instead of passing over it"
+        return RoutePhrase(list(zip(marks, parts)), first.column)
+
+    def avoid_route(self, children):
+        return self.route(children, negated=True)
+
+    def orientation(self, children):
+        length = next(t for t in children if isinstance(t, Token) and t.type == "LENGTH")
+        return OrientationPhrase(length.value, children[-1], children[0].column)
+
+    def direction(self, children):
+        token = children[0]
+        return "front" if token.type == "FRONT" else "back" if token.type == "BACK" else token.value
+
+    # ---- referring expressions
+    def np(self, children):
+        det = children[0].value if isinstance(children[0], Token) else None
+        premods = [c for c in children if isinstance(c, Premod)]
+        return NP(det, premods, children[-1].noun, column_of(children[0]))
+
+    def head(self, children):
+        token = children[-1]
+        return Head("one" if token.type == "ONE" else token.value, children[0].column)
+
+    def premod(self, children):
+        return _premod(children[0], False, children[0].column)
+
+    def non(self, children):
+        return _premod(children[1], True, children[0].column)
+
+    def chain(self, children):
+        return children
+
+    def link(self, children):
+        return Link("pp", children[-1], len(children) == 2, children[0].column)
+
+    def relative(self, children):
+        return Link("predicate", children[-1], _has(children, "NOT"), children[0].column)
+
+    def conjoined(self, children):
+        return Link("predicate", children[-1], _has(children, "NOT"), children[0].column)
+
+    def particle(self, children):
+        return Link("particle", None, False, children[0].column)
+
+    def predicate(self, children):
+        return Predicate("pp", children[0], children[0].column)
+
+    def colour(self, children):
+        return Predicate("color", children[0].value, children[0].column)
+
+    def size(self, children):
+        return Predicate("size", children[0].value, children[0].column)
+
+    def extreme(self, children):
+        return Predicate("extreme", children[0].value, children[0].column)
+
+    def kind(self, children):
+        np = NP(None, [c for c in children if isinstance(c, Premod)], children[-1].noun,
+                children[0].column)
+        return Predicate("kind", np, children[0].column)
+
+    def pp(self, children):
+        preposition, target = children
+        return PP(preposition.value, target, preposition.column)
+
+    def preposition(self, children):
+        first = children[0]
+        name = {"NEXT": "next_to", "OUT": "out_of"}.get(first.type, first.type.lower())
+        return Token("PREPOSITION", name, column=first.column)
+
+    def target(self, children):
+        return children[0]
+
+    def it(self, children):
+        return It(children[0].column)
+
+    def _region(self, kind, children, value=None, inner=None):
+        side = next((t.value for t in _tokens(children) if t.type in ("LEFT", "RIGHT")), value)
+        return Region(kind, side, _first(children, NP), inner, children[0].column)
+
+    def the_side(self, children):
+        return self._region("side", children)
+
+    def side_of(self, children):
+        return self._region("side_of", children)
+
+    def extreme_position(self, children):
+        return self._region("extreme_position", children, value=children[1].value)
+
+    def top_of(self, children):
+        return self._region("top_of", children)
+
+    def front_of(self, children):
+        return self._region("front_of", children)
+
+    def direction_of(self, children):
+        return self._region("direction_of", children)
+
+    def position(self, children):
+        return self._region("position", children, inner=children[-1])
+
+    def position_side_of(self, children):
+        inner = Region("side_of", next(t.value for t in _tokens(children)
+                                       if t.type in ("LEFT", "RIGHT")),
+                       children[-1], None, children[2].column)
+        return self._region("position", children, inner=inner)

@@ -1,0 +1,18 @@
+"""Files shipped with the package: grammars (and, later, templates and specs)."""
+
+from __future__ import annotations
+
+from importlib import resources
+from pathlib import Path
+
+# In a wheel the top-level grammar/ folder is installed as robofollow/grammar; in a source
+# checkout it sits beside the package.
+_SOURCE_GRAMMARS = Path(__file__).resolve().parent.parent / "grammar"
+
+
+def grammar_text(name: str) -> str:
+    """The text of a grammar file, e.g. 'instruction.lark'."""
+    packaged = resources.files("robofollow").joinpath("grammar", name)
+    if packaged.is_file():
+        return packaged.read_text(encoding="utf-8")
+    return (_SOURCE_GRAMMARS / name).read_text(encoding="utf-8")
