@@ -9,9 +9,7 @@ from __future__ import annotations
 import difflib
 import re
 from dataclasses import dataclass
-from functools import cache
-
-from lark import Token
+from functools import cache, lru_cache
 
 from robofollow.errors import UnknownWordError
 
@@ -151,7 +149,8 @@ _EXPANSIONS: dict[str, tuple[str, ...]] = {
 }
 
 _PUNCTUATION = {",": "COMMA", ";": "SEMICOLON", ".": "PERIOD"}
-_FINAL_PUNCTUATION = frozenset(".!")
+_MARKS = {**_PUNCTUATION, "!": "PERIOD"}
+_SEPARATORS = frozenset(_PUNCTUATION.values())
 
 # "and" starts a further modifier (AND_MOD), not a further clause, before these terminals.
 _MODIFIER_STARTS = frozenset({
@@ -169,6 +168,35 @@ _WORD_OR_MARK = re.compile(r"[A-Za-z]+(?:['’][A-Za-z]+)?(?:-[A-Za-z]+)*|[,;.!]
 class Word:
     terminal: str
     value: str
+
+
+class WordToken:
+    """One token for the LALR parser: its terminal, canonical value, and where it stands.
+
+    Lighter than lark's Token; lark reads only `type` and, for its end-of-input token and
+    errors, the position attributes below.
+    """
+
+    __slots__ = ("type", "value", "text", "column", "end_column")
+    line = end_line = 1
+
+    def __init__(self, type: str, value: str, text: str, column: int, end_column: int):
+        self.type = type
+        self.value = value
+        self.text = text
+        self.column = column
+        self.end_column = end_column
+
+    @property
+    def start_pos(self) -> int:
+        return self.column - 1
+
+    @property
+    def end_pos(self) -> int:
+        return self.end_column - 1
+
+    def __repr__(self) -> str:
+        return f"WordToken({self.type}, {self.text!r}, column={self.column})"
 
 
 def _build_vocabulary() -> dict[str, Word]:
@@ -202,52 +230,66 @@ def suggestions(word: str) -> list[str]:
     return difflib.get_close_matches(word, [*VOCABULARY, *_EXPANSIONS], n=3, cutoff=0.75)
 
 
-def _lower(word: str) -> str:
-    lowered = word.lower().replace("’", "'")
-    return lowered if len(lowered) == len(word) else word
+_Words = tuple[tuple[str, str, int, int], ...]  # (terminal, value, offset, length)
 
 
-def _split_word(word: str, column: int) -> list[tuple[str, int]]:
-    """Hyphenated words: 'left-most' -> 'leftmost'; 'non-leftmost' -> 'non', 'leftmost'."""
-    if "-" not in word:
-        return [(word, column)]
-    joined = word.replace("-", "")
-    if joined in VOCABULARY or joined in _EXPANSIONS:
-        return [(joined, column)]
-    parts, offset = [], 0
-    for part in word.split("-"):
-        parts.append((part, column + offset))
-        offset += len(part) + 1
-    return parts
+@lru_cache(maxsize=8192)
+def _analyse(piece: str) -> tuple[_Words, tuple[str, int] | None]:
+    """One word-like piece -> its tokens, or the first unknown part as (word, offset)."""
+    lowered = piece.lower().replace("’", "'")
+    if len(lowered) != len(piece):  # case folding changed the length: no vocabulary word
+        lowered = piece
+    if "-" in lowered and lowered.replace("-", "") in (VOCABULARY.keys() | _EXPANSIONS.keys()):
+        parts = [(lowered.replace("-", ""), 0)]
+    else:
+        parts, offset = [], 0
+        for part in lowered.split("-"):
+            parts.append((part, offset))
+            offset += len(part) + 1
+    words = []
+    for word, offset in parts:
+        for expanded in _EXPANSIONS.get(word, (word,)):
+            entry = VOCABULARY.get(expanded)
+            if entry is None:
+                return (), (piece[offset:offset + len(word)], offset)
+            words.append((entry.terminal, entry.value, offset, len(word)))
+    return tuple(words), None
 
 
-def tokenize(text: str) -> list[Token]:
+def tokenize(text: str) -> list[WordToken]:
     """Split an instruction into terminal tokens, each with its 1-based column in `text`."""
-    raw: list[tuple[str, str, int, int]] = []  # terminal, value, column, length
+    tokens: list[WordToken] = []
     for match in _WORD_OR_MARK.finditer(text):
-        piece, column = match.group(), match.start() + 1
-        if piece in _PUNCTUATION or piece == "!":
-            raw.append((_PUNCTUATION.get(piece, "PERIOD"), piece, column, 1))
+        piece, start = match.group(), match.start()
+        mark = _MARKS.get(piece)
+        if mark is not None:
+            tokens.append(WordToken(mark, piece, piece, start + 1, start + 2))
             continue
-        for word, word_column in _split_word(_lower(piece), column):
-            for expanded in _EXPANSIONS.get(word, (word,)):
-                entry = VOCABULARY.get(expanded)
-                if entry is None:
-                    raise UnknownWordError(
-                        f"unknown word {piece[word_column - column:][:len(word)]!r}",
-                        text=text, column=word_column, length=max(len(word), 1),
-                        suggestions=tuple(suggestions(word)),
-                    )
-                raw.append((entry.terminal, entry.value, word_column, len(word)))
-    while raw and raw[-1][0] == "PERIOD" and text[raw[-1][2] - 1] in _FINAL_PUNCTUATION:
-        raw.pop()
-    tokens: list[Token] = []
-    for index, (terminal, value, column, length) in enumerate(raw):
-        following = raw[index + 1][0] if index + 1 < len(raw) else None
-        if terminal in _PUNCTUATION.values() and following in _ABSORBING and tokens:
+        words, unknown = _analyse(piece)
+        if unknown is not None:
+            word, offset = unknown
+            raise UnknownWordError(f"unknown word {word!r}", text=text, column=start + offset + 1,
+                                   length=max(len(word), 1),
+                                   suggestions=tuple(suggestions(word.lower())))
+        for terminal, value, offset, length in words:
+            begin = start + offset
+            tokens.append(WordToken(terminal, value, text[begin:begin + length], begin + 1,
+                                    begin + length + 1))
+    while tokens and tokens[-1].type == "PERIOD":  # final '.' or '!'
+        tokens.pop()
+    return _disambiguate(tokens)
+
+
+def _disambiguate(tokens: list[WordToken]) -> list[WordToken]:
+    """Two-token decisions the LALR(1) parser cannot make: 'and' before a modifier is
+    AND_MOD; a separator right before 'otherwise' or 'if' is dropped."""
+    result: list[WordToken] = []
+    last = len(tokens) - 1
+    for index, token in enumerate(tokens):
+        following = tokens[index + 1].type if index < last else None
+        if token.type in _SEPARATORS and following in _ABSORBING and result:
             continue
-        if terminal == "AND" and following in _MODIFIER_STARTS:
-            terminal = "AND_MOD"
-        tokens.append(Token(terminal, value, start_pos=column - 1, line=1, column=column,
-                            end_column=column + length))
-    return tokens
+        if token.type == "AND" and following in _MODIFIER_STARTS:
+            token.type = "AND_MOD"
+        result.append(token)
+    return result

@@ -59,9 +59,8 @@ def _ungrammatical(error: UnexpectedToken, text: str) -> UngrammaticalError:
         message = ("the instruction is empty" if not text.strip()
                    else "the instruction ends too early")
         return UngrammaticalError(message, text=text, column=column, expected=tuple(expected))
-    length = (token.end_column or token.column + 1) - token.column
-    return UngrammaticalError(f"unexpected {str(token)!r} here", text=text, column=token.column,
-                              length=length, expected=tuple(expected))
+    return UngrammaticalError(f"unexpected {token.text!r} here", text=text, column=token.column,
+                              length=token.end_column - token.column, expected=tuple(expected))
 
 
 def parse(text: str) -> lf.Instruction:

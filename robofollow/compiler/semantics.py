@@ -256,7 +256,7 @@ class Semantics:
                 raise self.fail(action.column, "say which way to push: 'towards X' or "
                                                "'in the direction of X'")
             at = targets[0]
-            toward = self.extend(links[at].landmark, links[at + 1:])
+            toward = self.extend(links[at].landmark, [], links[at + 1:])
             links = links[:at]
         elif action.verb in _TRANSPORT_VERBS:
             candidates = [i for i, m in enumerate(links)
@@ -268,7 +268,7 @@ class Semantics:
                     raise self.fail(chosen.column, f"cannot place an object "
                                                    f"'{chosen.relation.replace('_', ' ')}' "
                                                    "something")
-                landmark = self.extend(chosen.landmark, links[at + 1:])
+                landmark = self.extend(chosen.landmark, [], links[at + 1:])
                 destination = lf.Placement(relation=chosen.relation, landmark=landmark)
                 links = links[:at]
             elif action.verb in _DESTINATION_REQUIRED:
@@ -377,10 +377,10 @@ class Semantics:
         if np.det == "that":
             raise self.fail(np.column, "'that <noun>' refers back to an object; none is "
                                        "mentioned before it")
-        base = lf.Ref(noun=self.head_noun(np, domain),
-                      constraints=tuple(self.premod(p) for p in np.premods)
-                      + (domain.constraints if np.head == "one" and domain else ()))
-        return self.extend(base, meanings)
+        constraints = [self.premod(p) for p in np.premods]
+        if np.head == "one" and domain is not None:
+            constraints.extend(domain.constraints)
+        return self.extend(self.head_noun(np, domain), constraints, meanings)
 
     def simple(self, np: NP) -> lf.Ref:
         """A landmark: a noun phrase described by its own words only."""
@@ -388,8 +388,12 @@ class Semantics:
             raise self.fail(np.column, f"'{np.det}' cannot introduce a landmark")
         return self.describe(np, [])
 
-    def extend(self, ref: lf.Ref, meanings: list[Meaning]) -> lf.Ref:
-        noun, constraints = ref.noun, list(ref.constraints)
+    def extend(self, noun: str | lf.Ref, constraints: list, meanings: list[Meaning]) -> lf.Ref:
+        """A reference from a noun (or an existing reference), constraints and chain links."""
+        if isinstance(noun, lf.Ref):
+            if not constraints and not meanings:
+                return noun
+            noun, constraints = noun.noun, list(noun.constraints) + constraints
         for m in meanings:
             if m.kind in ("relation", "source"):
                 constraints.append(lf.Related(relation=m.relation, landmark=m.landmark,

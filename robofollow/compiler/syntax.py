@@ -7,7 +7,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-from lark import Token, Transformer
+from lark import Transformer
+
+from robofollow.compiler.lexicon import WordToken
 
 # ---------------------------------------------------------------- records
 
@@ -150,6 +152,9 @@ class ConditionalPhrase:
 _PREMOD_KINDS = {"COLOR": "color", "SIZE": "size", "EXTREME": "extreme", "NOUN": "kind"}
 _SIDE_EXTREMES = {"left": "leftmost", "right": "rightmost", "front": "frontmost",
                   "back": "backmost"}
+_DETERMINERS = frozenset({"THE", "A", "THAT", "NO"})
+_BREAKS = frozenset({"THEN", "PERIOD", "SEMICOLON"})
+_PREPOSITION_NAMES = {"NEXT": "next_to", "OUT": "out_of"}
 
 
 def column_of(item) -> int:
@@ -157,31 +162,37 @@ def column_of(item) -> int:
     return item.column
 
 
-def _tokens(children) -> list[Token]:
-    return [c for c in children if isinstance(c, Token)]
-
-
 def _has(children, terminal: str) -> bool:
-    return any(isinstance(c, Token) and c.type == terminal for c in children)
+    return any(isinstance(c, WordToken) and c.type == terminal for c in children)
 
 
 def _first(children, kind):
     return next((c for c in children if isinstance(c, kind)), None)
 
 
-def _premod(token: Token, negated: bool, column: int) -> Premod:
-    if token.type in _PREMOD_KINDS:
-        return Premod(_PREMOD_KINDS[token.type], token.value, negated, column)
-    return Premod("extreme", _SIDE_EXTREMES[token.value], negated, column)
+def _side(children) -> str | None:
+    return next((c.value for c in children
+                 if isinstance(c, WordToken) and c.type in ("LEFT", "RIGHT")), None)
+
+
+def _premod(item, negated: bool = False) -> Premod:
+    """A premodifier token (or an already built 'non-' premodifier) as a record."""
+    if isinstance(item, Premod):
+        return item
+    if item.type in _PREMOD_KINDS:
+        return Premod(_PREMOD_KINDS[item.type], item.value, negated, item.column)
+    return Premod("extreme", _SIDE_EXTREMES[item.value], negated, item.column)
+
+
+def _premods(items) -> list[Premod]:
+    return [_premod(item) for item in items]
 
 
 class ToSyntax(Transformer):
-    """Callbacks named after grammar rules and aliases."""
+    """Callbacks named after grammar rules and aliases (rules marked '?' in the grammar pass
+    their only child through without a callback)."""
 
     # ---- conditionals
-    def start(self, children):
-        return children[0]
-
     def if_(self, children):
         condition = _first(children, ConditionPhrase)
         then, *otherwise = [c for c in children if isinstance(c, Steps)]
@@ -217,24 +228,18 @@ class ToSyntax(Transformer):
     def has_on_top(self, children):
         return self._possession("has_on_top", children)
 
-    def condition_predicate(self, children):
-        return children[0]
-
     def empty(self, children):
         return Predicate("empty", _has(children, "NON"), children[0].column)
 
     # ---- clauses
     def steps(self, children):
-        segments = [c for c in children if not isinstance(c, Token) and c is not None]
+        segments: list = []
+        for child in children:
+            if not isinstance(child, WordToken):
+                segments.append(child)
+            elif child.type in _BREAKS and segments and not isinstance(segments[-1], Break):
+                segments.append(Break(child.column))
         return Steps(segments, column_of(segments[0]))
-
-    def connective(self, children):
-        if _has(children, "THEN") or _has(children, "PERIOD") or _has(children, "SEMICOLON"):
-            return Break(children[0].column)
-        return None
-
-    def segment(self, children):
-        return children[0]
 
     def arm_lead(self, children):
         arm, action = children[0], children[-1]
@@ -257,8 +262,8 @@ class ToSyntax(Transformer):
         return self._marked("after", children)
 
     def among(self, children):
-        premods = [c for c in children if isinstance(c, Premod)]
-        return Among(premods, children[-1].value, children[0].column)
+        words = [c for c in children[1:-1] if getattr(c, "type", None) != "THE"]
+        return Among(_premods(words), children[-1].value, children[0].column)
 
     def action(self, children, gerund=False):
         verb, obj = children[0], children[1]
@@ -268,51 +273,39 @@ class ToSyntax(Transformer):
     def gerund_action(self, children):
         return self.action(children, gerund=True)
 
-    def verb(self, children):
+    def verb(self, children):  # "pick up": the particle adds nothing
         return children[0]
 
     gerund = verb
 
-    def object(self, children):
-        child = children[0]
-        return It(child.column) if isinstance(child, Token) else child
-
     def arm(self, children):
-        side = next(t for t in children if t.type in ("LEFT", "RIGHT"))
-        return ArmPhrase(side.value, children[0].column)
+        return ArmPhrase(_side(children), children[0].column)
 
     def route(self, children, negated=False):
-        parts = [c for c in children if not isinstance(c, Token)]
-        first = _tokens(children)[0]
+        parts = [c for c in children if not isinstance(c, WordToken)]
         marks = [negated] + [True] * (len(parts) - 1)  # "go around X instead of passing over it"
-        return RoutePhrase(list(zip(marks, parts)), first.column)
+        return RoutePhrase(list(zip(marks, parts)), children[0].column)
 
     def avoid_route(self, children):
         return self.route(children, negated=True)
 
     def orientation(self, children):
-        length = next(t for t in children if isinstance(t, Token) and t.type == "LENGTH")
-        return OrientationPhrase(length.value, children[-1], children[0].column)
-
-    def direction(self, children):
-        token = children[0]
-        return "front" if token.type == "FRONT" else "back" if token.type == "BACK" else token.value
+        length = next(t for t in children if isinstance(t, WordToken) and t.type == "LENGTH")
+        return OrientationPhrase(length.value, children[-1].value, children[0].column)
 
     # ---- referring expressions
     def np(self, children):
-        det = children[0].value if isinstance(children[0], Token) else None
-        premods = [c for c in children if isinstance(c, Premod)]
-        return NP(det, premods, children[-1].noun, column_of(children[0]))
+        det = children[0].value if getattr(children[0], "type", None) in _DETERMINERS else None
+        premods = _premods(children[1 if det else 0:-1])
+        return NP(det, premods, children[-1].value, column_of(children[0]))
 
-    def head(self, children):
-        token = children[-1]
-        return Head("one" if token.type == "ONE" else token.value, children[0].column)
-
-    def premod(self, children):
-        return _premod(children[0], False, children[0].column)
+    def square_label(self, children):
+        return children[-1]
 
     def non(self, children):
-        return _premod(children[1], True, children[0].column)
+        premod = _premod(children[1], negated=True)
+        premod.column = children[0].column
+        return premod
 
     def chain(self, children):
         return children
@@ -323,8 +316,7 @@ class ToSyntax(Transformer):
     def relative(self, children):
         return Link("predicate", children[-1], _has(children, "NOT"), children[0].column)
 
-    def conjoined(self, children):
-        return Link("predicate", children[-1], _has(children, "NOT"), children[0].column)
+    conjoined = relative
 
     def particle(self, children):
         return Link("particle", None, False, children[0].column)
@@ -342,28 +334,23 @@ class ToSyntax(Transformer):
         return Predicate("extreme", children[0].value, children[0].column)
 
     def kind(self, children):
-        np = NP(None, [c for c in children if isinstance(c, Premod)], children[-1].noun,
-                children[0].column)
+        np = NP(None, _premods(children[1:-1]), children[-1].value, children[0].column)
         return Predicate("kind", np, children[0].column)
 
     def pp(self, children):
         preposition, target = children
-        return PP(preposition.value, target, preposition.column)
+        name = _PREPOSITION_NAMES.get(preposition.type, preposition.type.lower())
+        return PP(name, target, preposition.column)
 
-    def preposition(self, children):
-        first = children[0]
-        name = {"NEXT": "next_to", "OUT": "out_of"}.get(first.type, first.type.lower())
-        return Token("PREPOSITION", name, column=first.column)
-
-    def target(self, children):
+    def preposition(self, children):  # "next to", "out of", "inside of", "off of"
         return children[0]
 
     def it(self, children):
         return It(children[0].column)
 
     def _region(self, kind, children, value=None, inner=None):
-        side = next((t.value for t in _tokens(children) if t.type in ("LEFT", "RIGHT")), value)
-        return Region(kind, side, _first(children, NP), inner, children[0].column)
+        return Region(kind, _side(children) or value, _first(children, NP), inner,
+                      children[0].column)
 
     def the_side(self, children):
         return self._region("side", children)
@@ -387,7 +374,5 @@ class ToSyntax(Transformer):
         return self._region("position", children, inner=children[-1])
 
     def position_side_of(self, children):
-        inner = Region("side_of", next(t.value for t in _tokens(children)
-                                       if t.type in ("LEFT", "RIGHT")),
-                       children[-1], None, children[2].column)
+        inner = Region("side_of", _side(children), children[-1], None, children[2].column)
         return self._region("position", children, inner=inner)
