@@ -1,0 +1,338 @@
+"""Logical form -> English, in several paraphrase styles.
+
+Every style is a complete way of speaking: `parse(realize(lf, style)) == lf` for every LF and
+style (a property the tests check). The structure is decided here, following the parser's
+attachment rules (semantics.py): a destination landmark is described with relative clauses
+("behind the block that is left of the ball"), never with bare phrases that the parser would
+take as the destination; landmarks of relations use only premodifiers ("the non-leftmost
+ball"). The words and frames live in templates/english.j2.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from functools import cache
+
+import jinja2
+
+from robofollow.compiler import lf
+
+
+@dataclass(frozen=True)
+class Style:
+    name: str
+    arm: str  # lead ("use your left arm to"), trailing ("... using your left arm"), fronted
+    arm_word: str  # trailing arm: "using" / "with"
+    pick_verb: str
+    pick_gerund: str
+    place_form: str  # "it" (pick up X and place it D) or "direct" (put X D)
+    place_verb: str
+    place_joiner: str
+    direct_verb: str
+    direct_gerund: str
+    push_preposition: str
+    via: str  # pass, move, go
+    avoid: str  # avoid, detour, around, while
+    orientation: str  # with, bare, its
+    sequence: str  # first, start, before, after
+    conditional: str  # if, when, check, unless
+    condition: str  # there_is, possessive, state
+    extreme: str  # premod (leftmost cube), left (left cube), post (cube on the left), relative
+    negation: str  # relative ("that is not red"), pp ("not in the bowl"), non ("non-red")
+    relation: str  # pp ("to the left of X") or relative ("that is to the left of X")
+    sides: str  # "to the {} of" / "on the {} side of"
+    destinations: dict[str, str] = field(default_factory=dict)
+    nouns: dict[str, str] = field(default_factory=dict)
+    among: bool = False
+
+
+_SIDE_DESTINATIONS = {"in_front_of": "in front of", "behind": "behind"}
+
+STYLES: dict[str, Style] = {style.name: style for style in (
+    Style("plain", arm="lead", arm_word="using", pick_verb="pick up", pick_gerund="picking up",
+          place_form="it", place_verb="place", place_joiner="and", direct_verb="put",
+          direct_gerund="putting", push_preposition="towards", via="pass", avoid="avoid",
+          orientation="with", sequence="first", conditional="if", condition="there_is",
+          extreme="premod", negation="relative", relation="pp", sides="to the {} of",
+          destinations={"on": "on", "in": "in", "next_to": "next to"}),
+    Style("trailing", arm="trailing", arm_word="using", pick_verb="grasp",
+          pick_gerund="grasping", place_form="direct", place_verb="put", place_joiner="and",
+          direct_verb="move", direct_gerund="moving", push_preposition="in the direction of",
+          via="move", avoid="while", orientation="bare", sequence="before", conditional="when",
+          condition="possessive", extreme="post", negation="pp", relation="pp",
+          sides="on the {} side of",
+          destinations={"on": "onto", "in": "into", "next_to": "beside"},
+          nouns={"sphere": "ball"}),
+    Style("fronted", arm="fronted", arm_word="using", pick_verb="take", pick_gerund="taking",
+          place_form="it", place_verb="put", place_joiner="then", direct_verb="place",
+          direct_gerund="placing", push_preposition="toward", via="go", avoid="detour",
+          orientation="its", sequence="start", conditional="check", condition="state",
+          extreme="relative", negation="relative", relation="relative", sides="to the {} of",
+          destinations={"on": "on top of", "in": "inside", "next_to": "next to",
+                        "left_of": "at the position left of",
+                        "right_of": "at the position right of"},
+          nouns={"object": "item", "slab": "bar"}),
+    Style("varied", arm="trailing", arm_word="with", pick_verb="grab", pick_gerund="grabbing",
+          place_form="it", place_verb="set", place_joiner="and then", direct_verb="put",
+          direct_gerund="putting", push_preposition="toward", via="move", avoid="around",
+          orientation="with", sequence="after", conditional="unless", condition="possessive",
+          extreme="left", negation="non", relation="relative", sides="on the {} side of",
+          destinations={"on": "on", "in": "into", "next_to": "beside"},
+          nouns={"sphere": "ball", "label": "square label"}, among=True),
+)}
+
+_PLURALS = {"sphere": "spheres", "ball": "balls", "object": "objects", "item": "items",
+            "block": "blocks", "cube": "cubes", "cylinder": "cylinders", "slab": "slabs",
+            "bar": "bars", "bowl": "bowls", "label": "labels", "square label": "labels",
+            "table": "tables"}
+_SIDE_WORDS = {"leftmost": "left", "rightmost": "right", "frontmost": "front",
+               "backmost": "back"}
+_EXTREME_POSITIONS = {"leftmost": "on the left", "rightmost": "on the right",
+                      "frontmost": "in the frontmost position",
+                      "backmost": "in the backmost position"}
+_RELATION_WORDS = {"in_front_of": "in front of", "behind": "behind", "on": "on", "in": "in",
+                   "next_to": "next to", "touching": "touching"}
+
+
+@cache
+def _frames() -> jinja2.runtime.TemplateModule:
+    env = jinja2.Environment(loader=jinja2.PackageLoader("robofollow.compiler", "templates"),
+                             autoescape=False, undefined=jinja2.StrictUndefined)
+    return env.get_template("english.j2").module
+
+
+def _article(phrase: str) -> str:
+    return ("an " if phrase[:1] in "aeiou" else "a ") + phrase
+
+
+def _sentence(text: str) -> str:
+    text = re.sub(r"\s+", " ", text).strip()
+    text = re.sub(r"(^|[.] )([a-z])", lambda m: m.group(1) + m.group(2).upper(), text)
+    return text + "."
+
+
+class Realizer:
+    """Speaks logical forms in one style."""
+
+    def __init__(self, style: Style):
+        self.s = style
+        self.t = _frames()
+
+    # ---------------------------------------------------------------- instructions
+    def instruction(self, instruction: lf.Instruction) -> str:
+        if isinstance(instruction, lf.Conditional):
+            return _sentence(self.conditional(instruction))
+        return _sentence(self.body(instruction, top=True))
+
+    def conditional(self, c: lf.Conditional) -> str:
+        form = self.s.conditional
+        condition = c.condition
+        if form == "unless":
+            positive = self.positive(condition)
+            form, condition = ("unless", positive) if positive is not None else ("if", condition)
+        if form == "check" and c.otherwise is None:
+            form = "if"
+        otherwise = self.body(c.otherwise) if c.otherwise is not None else None
+        return str(self.t.conditional(form, self.condition(condition), self.body(c.then),
+                                      otherwise))
+
+    @staticmethod
+    def positive(condition: lf.Condition) -> lf.Condition | None:
+        """The condition with its negation removed, when it is negated ('unless' form)."""
+        if isinstance(condition, lf.Exists):
+            return condition.model_copy(update={"negated": False}) if condition.negated else None
+        prop = condition.property
+        if getattr(prop, "negated", False):
+            return lf.Holds(subject=condition.subject,
+                            property=prop.model_copy(update={"negated": False}))
+        return None
+
+    def body(self, body: lf.Body, top: bool = False) -> str:
+        if not isinstance(body, lf.Sequence):
+            among = self.among(body) if top else None
+            if among is not None:
+                return among
+            return self.command(body, fronted_arm=True)
+        form = self.s.sequence
+        if form in ("before", "after") and len(body.steps) != 2:
+            form = "then"
+        steps = [self.command(step, fronted_arm=False) for step in body.steps]
+        gerunds = [self.gerund_command(step) for step in body.steps]
+        return str(self.t.sequence(form, steps, gerunds))
+
+    # ---------------------------------------------------------------- commands
+    def command(self, c: lf.Pick | lf.Place | lf.Push, fronted_arm: bool,
+                obj: str | None = None) -> str:
+        obj = obj if obj is not None else self.ref(c.object)
+        tail: list[str] = []
+        if isinstance(c, lf.Pick):
+            clause = str(self.t.pick(self.s, obj))
+        elif isinstance(c, lf.Push):
+            clause = str(self.t.push(self.s, obj, self.ref(c.toward)))
+        else:
+            clause, tail = self.place(c, obj, gerund=False)
+        return self.with_arm(c.arm, clause, tail, fronted_arm)
+
+    def with_arm(self, arm: str | None, clause: str, tail: list[str], fronted_arm: bool) -> str:
+        text = clause
+        mode = self.s.arm if fronted_arm or self.s.arm != "fronted" else "lead"
+        if arm is not None:
+            if mode == "lead":
+                text = f"{self.t.arm_lead(arm)} {clause}"
+            elif mode == "fronted":
+                text = f"{self.t.arm_fronted(arm)} {clause}"
+            else:
+                text = f"{clause} {self.t.arm_trailing(self.s, arm)}"
+        return text + "".join(tail)
+
+    def gerund_command(self, c: lf.Pick | lf.Place | lf.Push) -> str:
+        obj = self.ref(c.object)
+        tail: list[str] = []
+        if isinstance(c, lf.Pick):
+            clause = str(self.t.pick(self.s, obj, gerund=True))
+        elif isinstance(c, lf.Push):
+            clause = str(self.t.push(self.s, obj, self.ref(c.toward), gerund=True))
+        else:
+            clause, tail = self.place(c, obj, gerund=True)
+        if c.arm is not None:
+            clause = f"{clause} {self.t.arm_trailing(self.s, c.arm)}"
+        return clause + "".join(tail)
+
+    def place(self, c: lf.Place, obj: str, gerund: bool) -> tuple[str, list[str]]:
+        """The placement clause and what follows the arm phrase (routes, orientation)."""
+        destination = self.destination(c.destination)
+        vias = [w for w in c.route if w.mode == "via"]
+        avoids = [w for w in c.route if w.mode == "avoid"]
+        tail: list[str] = []
+        if self.s.place_form == "it" and not gerund:
+            clauses = [str(self.t.via(self.s, self.landmark(w.landmark))) for w in vias]
+            clauses += [str(self.t.avoid(self.s, self.landmark(w.landmark))) for w in avoids]
+            clause = str(self.t.place_with_it(self.s, obj, clauses, destination))
+        else:
+            clause = str(self.t.place_direct(self.s, obj, [self.landmark(w.landmark) for w in vias],
+                                             destination, gerund=gerund))
+            tail += [", " + str(self.t.avoid(self.s, self.landmark(w.landmark)))
+                     for w in avoids]
+        if c.orientation is not None:
+            words = str(self.t.orientation(self.s, c.orientation.side, c.orientation.facing))
+            tail.append(words if words.startswith(",") else " " + words)
+        return clause, tail
+
+    def among(self, c: lf.Pick | lf.Place | lf.Push) -> str | None:
+        """'Among the cubes, pick up the one on the left' when the object allows it."""
+        if not self.s.among or c.object.noun == "object":
+            return None
+        extremes = [x for x in c.object.constraints
+                    if isinstance(x, lf.ExtremeIs) and not x.negated]
+        others = [x for x in c.object.constraints if x not in extremes]
+        if len(extremes) != 1 or not all(isinstance(x, (lf.ColorIs, lf.SizeIs)) and
+                                         not getattr(x, "negated", False) for x in others):
+            return None
+        domain = " ".join([self.premod(x) for x in others] +
+                          [_PLURALS[self.noun(c.object.noun)]])
+        obj = f"the one {_EXTREME_POSITIONS[extremes[0].extreme]}"
+        return f"among the {domain}, {self.command(c, fronted_arm=False, obj=obj)}"
+
+    # ---------------------------------------------------------------- conditions
+    def condition(self, c: lf.Condition) -> str:
+        if isinstance(c, lf.Holds):
+            negated = isinstance(c.property, lf.NotKind) or getattr(c.property, "negated", False)
+            return str(self.t.holds(self.ref(c.subject), self.predicate(c.property), negated))
+        relations = [x for x in c.ref.constraints if isinstance(x, lf.Related)]
+        if len(relations) == 1 and not relations[0].negated and relations[0].relation in ("in", "on"):
+            container = self.landmark(relations[0].landmark)
+            rest = lf.Ref(noun=c.ref.noun,
+                          constraints=tuple(x for x in c.ref.constraints if x != relations[0]))
+            if self.s.condition == "state" and relations[0].relation == "in" and rest == lf.Ref(
+                    noun="object"):
+                return str(self.t.emptiness(container, c.negated))
+            if self.s.condition == "possessive":
+                thing = _article(self.landmark(rest, determiner=False))
+                frame = self.t.contains if relations[0].relation == "in" else self.t.has_on_top
+                return str(frame(container, thing, c.negated))
+        thing = self.ref(c.ref, determiner=False)
+        return str(self.t.there_is(thing if c.negated else _article(thing), c.negated))
+
+    def predicate(self, p: lf.Constraint) -> str:
+        if isinstance(p, lf.ColorIs):
+            return p.color
+        if isinstance(p, lf.SizeIs):
+            return p.size
+        if isinstance(p, lf.ExtremeIs):
+            return p.extreme
+        if isinstance(p, lf.NotKind):
+            return _article(self.noun(p.noun))
+        return self.relation_phrase(p.relation, p.landmark)
+
+    # ---------------------------------------------------------------- referring expressions
+    def noun(self, noun: str) -> str:
+        return self.s.nouns.get(noun, noun)
+
+    def relation_phrase(self, relation: str, landmark: lf.Ref) -> str:
+        if relation in ("left_of", "right_of"):
+            words = self.s.sides.format(relation.removesuffix("_of"))
+        else:
+            words = _RELATION_WORDS[relation]
+        return f"{words} {self.landmark(landmark)}"
+
+    def destination(self, d: lf.Placement) -> str:
+        words = self.s.destinations.get(d.relation)
+        if words is None:
+            words = (_SIDE_DESTINATIONS.get(d.relation) or
+                     self.s.sides.format(d.relation.removesuffix("_of")))
+        return f"{words} {self.ref(d.landmark, relative=True)}"
+
+    def premod(self, c: lf.Constraint) -> str:
+        """A constraint as a word before the noun ('red', 'non-leftmost', 'non-cube')."""
+        if isinstance(c, lf.ColorIs):
+            return ("non-" if c.negated else "") + c.color
+        if isinstance(c, lf.SizeIs):
+            return c.size
+        if isinstance(c, lf.ExtremeIs):
+            if c.negated:
+                return "non-" + c.extreme
+            return _SIDE_WORDS[c.extreme] if self.s.extreme == "left" else c.extreme
+        return "non-" + c.noun
+
+    def landmark(self, ref: lf.Ref, determiner: bool = True) -> str:
+        """A reference described by premodifiers only."""
+        words = [self.premod(c) for c in ref.constraints] + [self.noun(ref.noun)]
+        return ("the " if determiner else "") + " ".join(words)
+
+    def ref(self, ref: lf.Ref, determiner: bool = True, relative: bool = False) -> str:
+        """A reference; `relative` puts every relation in a relative clause."""
+        premods: list[str] = []
+        posts: list[str] = []  # predicate phrases after the noun
+        starts: list[str] = []  # how the first post is introduced: "" (a pp) or "that is"
+        for c in ref.constraints:
+            negated = getattr(c, "negated", False) or isinstance(c, lf.NotKind)
+            if isinstance(c, lf.Related):
+                phrase = self.relation_phrase(c.relation, c.landmark)
+                as_pp = not relative and (self.s.negation == "pp" if negated
+                                          else self.s.relation == "pp")
+                posts.append(("not " if negated else "") + phrase)
+                starts.append("" if as_pp else "that is")
+            elif isinstance(c, lf.ExtremeIs) and not negated and self.s.extreme in ("post", "relative"):
+                if self.s.extreme == "post" and not relative:
+                    posts.append(_EXTREME_POSITIONS[c.extreme])
+                    starts.append("")
+                else:
+                    posts.append(c.extreme)
+                    starts.append("that is")
+            elif negated and self.s.negation != "non":
+                posts.append("not " + (self.predicate(c) if not isinstance(c, lf.ExtremeIs)
+                                       else c.extreme))
+                starts.append("that is")
+            else:
+                premods.append(self.premod(c))
+        words = premods + [self.noun(ref.noun)]
+        if posts:
+            first = f"{starts[0]} {posts[0]}".strip()
+            words.append(" and ".join([first] + posts[1:]))
+        return ("the " if determiner else "") + " ".join(words)
+
+
+def realize(instruction: lf.Instruction, style: str = "plain") -> str:
+    """English for a logical form, in one of STYLES."""
+    return Realizer(STYLES[style]).instruction(instruction)
