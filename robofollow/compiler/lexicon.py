@@ -25,7 +25,7 @@ _CLASSES: dict[str, dict[str, str] | tuple[str, ...]] = {
         "objects": "object", "items": "object", "things": "object",
         "blocks": "block", "cubes": "cube", "cylinders": "cylinder",
         "spheres": "sphere", "balls": "sphere", "slabs": "slab", "bars": "slab",
-        "bowls": "bowl", "labels": "label",
+        "bowls": "bowl", "labels": "label", "tables": "table",
     },
     "LABEL": {"label": "label"},
     "SQUARE": ("square",),

@@ -45,8 +45,7 @@ def _lark() -> Lark:
 def terminal_name(terminal: str) -> str:
     if terminal in _TERMINAL_NAMES:
         return _TERMINAL_NAMES[terminal]
-    words = words_of(terminal)
-    return " or ".join(repr(w) for w in words[:3]) + (" ..." if len(words) > 3 else "")
+    return repr(words_of(terminal)[0])
 
 
 def _ungrammatical(error: UnexpectedToken, text: str) -> UngrammaticalError:

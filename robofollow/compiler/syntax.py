@@ -149,7 +149,8 @@ class ConditionalPhrase:
 
 # ---------------------------------------------------------------- helpers
 
-_PREMOD_KINDS = {"COLOR": "color", "SIZE": "size", "EXTREME": "extreme", "NOUN": "kind"}
+_PREMOD_KINDS = {"COLOR": "color", "SIZE": "size", "EXTREME": "extreme", "NOUN": "kind",
+                 "LABEL": "kind"}
 _SIDE_EXTREMES = {"left": "leftmost", "right": "rightmost", "front": "frontmost",
                   "back": "backmost"}
 _DETERMINERS = frozenset({"THE", "A", "THAT", "NO"})

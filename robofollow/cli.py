@@ -1,0 +1,96 @@
+"""`robofollow` command line: thin wrappers around library functions."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from importlib.metadata import version
+
+from robofollow.compiler import lf
+from robofollow.compiler.notation import notation
+from robofollow.compiler.parser import parse
+from robofollow.compiler.realize import STYLES, realize
+from robofollow.errors import InstructionError, RoboFollowError
+
+_PARSE_EXAMPLES = """\
+examples:
+  robofollow parse "Use your left arm to pick up the block to the right of the red ball."
+  robofollow parse --json "Push the leftmost cube towards the larger red object."
+  robofollow parse --style trailing "If the bowl is empty, pick up the red sphere."
+  printf 'Pick up the red cube.\\nPick up the cube.\\n' | robofollow parse -
+
+With '-', each line of standard input is one instruction and each output line is one JSON
+object: {"text": ..., "lf": {...}} or {"text": ..., "error": {"type", "column", "message"}}.
+The exit status is 1 when any instruction fails to parse.
+"""
+
+
+def _parse_one(text: str, args) -> int:
+    try:
+        instruction = parse(text)
+    except InstructionError as error:
+        print(error.render(), file=sys.stderr)
+        return 1
+    if args.json:
+        print(lf.to_json(instruction, indent=2))
+    else:
+        print(f"lf       {notation(instruction)}")
+        print(f"english  {realize(instruction, args.style)}")
+    return 0
+
+
+def _parse_stream(stream, out) -> int:
+    status = 0
+    for line in stream:
+        text = line.rstrip("\n")
+        if not text.strip():
+            continue
+        try:
+            record = {"text": text, "lf": parse(text).model_dump(mode="json")}
+        except InstructionError as error:
+            record, status = {"text": text, "error": error.to_dict()}, 1
+        out.write(json.dumps(record, ensure_ascii=False) + "\n")
+    return status
+
+
+def cmd_parse(args) -> int:
+    if args.text == "-":
+        return _parse_stream(sys.stdin, sys.stdout)
+    return _parse_one(args.text, args)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="robofollow",
+        description="RoboFollow: measure whether robot policies really follow language "
+                    "instructions.")
+    parser.add_argument("--version", action="version",
+                        version=f"robofollow {version('robofollow')}")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    p = commands.add_parser(
+        "parse", help="parse instructions into canonical logical forms",
+        description="Parse an instruction into its canonical logical form and say it back in "
+                    "English.", epilog=_PARSE_EXAMPLES,
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("text", metavar="TEXT", help="the instruction, or '-' to read one per line "
+                                                "from standard input (JSON lines out)")
+    p.add_argument("--json", action="store_true", help="print the logical form as JSON")
+    p.add_argument("--style", choices=sorted(STYLES), default="plain",
+                   help="paraphrase style of the English line (default: plain)")
+    p.set_defaults(handler=cmd_parse)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.handler(args)
+    except RoboFollowError as error:
+        print(error.render(), file=sys.stderr)
+        return 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
