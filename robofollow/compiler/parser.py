@@ -23,7 +23,7 @@ _TERMINAL_NAMES = {
     "COMMA": "','", "SEMICOLON": "';'", "PERIOD": "'.'", "AND_MOD": "'and'",
     "$END": "the end of the instruction",
 }
-_MAX_EXPECTED = 12
+_MAX_EXPECTED = 20
 
 
 class _WordLexer(Lexer):
@@ -53,8 +53,8 @@ def _ungrammatical(error: UnexpectedToken, text: str) -> UngrammaticalError:
     if len(expected) > _MAX_EXPECTED:
         expected = expected[:_MAX_EXPECTED] + ["..."]
     token = error.token
-    if token.type == "$END":
-        column = len(text.rstrip()) + 1
+    if token.type == "$END":  # lark places it at the last word
+        column = token.end_column or 1
         message = ("the instruction is empty" if not text.strip()
                    else "the instruction ends too early")
         return UngrammaticalError(message, text=text, column=column, expected=tuple(expected))

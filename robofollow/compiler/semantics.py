@@ -217,7 +217,8 @@ class Semantics:
         anaphoric = isinstance(action.obj, It) or action.obj.det == "that"
         referent = current.object if current is not None else focus
         if anaphoric and referent is None:
-            raise self.fail(action.obj.column, "'it' / 'that' does not refer to anything here")
+            word = "it" if isinstance(action.obj, It) else f"that {action.obj.head}"
+            raise self.fail(action.obj.column, f"'{word}' does not refer to anything here")
         described, destination, toward, route = self.split_chain(action, meanings)
         if anaphoric:
             obj = self.resolve_anaphor(action.obj, referent, described)
