@@ -81,7 +81,7 @@ def test_ungrammatical_error_says_what_was_expected():
     with pytest.raises(UngrammaticalError) as caught:
         parse("Pick up the the red cube.")
     assert "a colour" in caught.value.expected
-    assert "'leftmost'" in caught.value.expected
+    assert "'leftmost' or 'rightmost'" in caught.value.expected
     with pytest.raises(UngrammaticalError) as caught:
         parse("Push the cube towards")
     assert caught.value.message == "the instruction ends too early"
