@@ -1,0 +1,62 @@
+"""`robofollow parse` from the command line."""
+
+import io
+import json
+import subprocess
+import sys
+
+from robofollow import cli
+
+
+def run(capsys, *argv):
+    status = cli.main(list(argv))
+    out, err = capsys.readouterr()
+    return status, out, err
+
+
+def test_parse_prints_form_and_english(capsys):
+    status, out, _ = run(capsys, "parse", "Grab the leftmost cube with your left arm.")
+    assert status == 0
+    assert out.splitlines() == ["lf       pick(left, cube[leftmost])",
+                                "english  Use your left arm to pick up the leftmost cube."]
+
+
+def test_parse_json_is_the_canonical_form(capsys):
+    status, out, _ = run(capsys, "parse", "--json", "Push the red cube towards the bowl.")
+    assert status == 0
+    data = json.loads(out)
+    assert data["type"] == "push" and data["toward"] == {"noun": "bowl", "constraints": []}
+
+
+def test_parse_error_shows_caret_and_suggestion_and_exits_1(capsys):
+    status, out, err = run(capsys, "parse", "Pick up the blue cilinder.")
+    assert status == 1 and out == ""
+    assert err.splitlines()[:3] == ["error: unknown word 'cilinder' (column 18)",
+                                    "  Pick up the blue cilinder.",
+                                    "  " + " " * 17 + "^" * 8]
+    assert "did you mean: 'cylinder'" in err
+
+
+def test_parse_stdin_writes_json_lines_and_exits_1_on_any_failure(capsys, monkeypatch):
+    monkeypatch.setattr(sys, "stdin", io.StringIO(
+        "Pick up the red cube.\n\nPlace it behind.\nPick up the ball.\n"))
+    status, out, _ = run(capsys, "parse", "-")
+    records = [json.loads(line) for line in out.splitlines()]
+    assert status == 1
+    assert [r["text"] for r in records] == ["Pick up the red cube.", "Place it behind.",
+                                            "Pick up the ball."]
+    assert records[0]["lf"]["object"]["noun"] == "cube"
+    assert records[1]["error"] == {"type": "ungrammatical", "column": 16,
+                                   "message": "the instruction ends too early"}
+    assert records[2]["lf"]["object"]["noun"] == "sphere"
+
+
+def test_parse_stdin_all_good_exits_0(capsys, monkeypatch):
+    monkeypatch.setattr(sys, "stdin", io.StringIO("Pick up the red cube.\n"))
+    assert run(capsys, "parse", "-")[0] == 0
+
+
+def test_console_script_help():
+    result = subprocess.run(["robofollow", "parse", "--help"], capture_output=True, text=True)
+    assert result.returncode == 0
+    assert "robofollow parse -" in result.stdout and "--json" in result.stdout
