@@ -1,6 +1,5 @@
 """The grammar file, the lexicon and the packaged wheel agree."""
 
-import re
 import subprocess
 import sys
 import zipfile

@@ -62,18 +62,19 @@ class NotKind(Node):
     noun: Noun
 
 
+def _simple_landmark(landmark: Ref) -> Ref:
+    if not landmark.is_simple:
+        raise ValueError("this landmark cannot itself be described by a relation")
+    return landmark
+
+
 class Related(Node):
     type: Literal["relation"] = "relation"
     relation: Relation
     landmark: Ref
     negated: bool = False
 
-    @field_validator("landmark")
-    @classmethod
-    def _landmark_is_simple(cls, landmark: Ref) -> Ref:
-        if not landmark.is_simple:
-            raise ValueError("a relation's landmark cannot itself be described by a relation")
-        return landmark
+    _landmark_is_simple = field_validator("landmark")(_simple_landmark)
 
 
 Constraint = Annotated[Union[ColorIs, SizeIs, ExtremeIs, NotKind, Related],
@@ -121,12 +122,7 @@ class Waypoint(Node):
     mode: Literal["via", "avoid"]
     landmark: Ref
 
-    @field_validator("landmark")
-    @classmethod
-    def _landmark_is_simple(cls, landmark: Ref) -> Ref:
-        if not landmark.is_simple:
-            raise ValueError("a waypoint's landmark cannot be described by a relation")
-        return landmark
+    _landmark_is_simple = field_validator("landmark")(_simple_landmark)
 
 
 class Orientation(Node):

@@ -5,7 +5,7 @@ The records keep words, structure and columns; meaning is decided in semantics.p
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 from lark import Transformer
 
@@ -285,7 +285,7 @@ class ToSyntax(Transformer):
     def route(self, children, negated=False):
         parts = [c for c in children if not isinstance(c, WordToken)]
         marks = [negated] + [True] * (len(parts) - 1)  # "go around X instead of passing over it"
-        return RoutePhrase(list(zip(marks, parts)), children[0].column)
+        return RoutePhrase(list(zip(marks, parts, strict=True)), children[0].column)
 
     def avoid_route(self, children):
         return self.route(children, negated=True)
