@@ -140,6 +140,12 @@ CASES = [
      'place(any arm, cube[red] -> behind(sphere[green]))'),
     ('If the blue sphere is left of the red sphere, first pick up the blue sphere with your left arm, then pick up the red sphere with your right arm; otherwise pick up the green cylinder.',
      'if sphere[blue] is left_of(sphere[red]): pick(left, sphere[blue]); then pick(right, sphere[red]) otherwise: pick(any arm, cylinder[green])'),
+    ('Before picking up the red sphere, pick up the blue sphere with your right arm.',
+     'pick(right, sphere[blue]); then pick(any arm, sphere[red])'),
+    ('After grasping the green cylinder with your right arm, grab the red ball.',
+     'pick(right, cylinder[green]); then pick(any arm, sphere[red])'),
+    ('Pick up the red cube after picking up the blue cube, then push the ball towards the bowl.',
+     'pick(any arm, cube[blue]); then pick(any arm, cube[red]); then push(any arm, sphere -> towards bowl)'),
 ]
 
 

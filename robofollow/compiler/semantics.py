@@ -10,8 +10,8 @@ Decides what the grammar leaves open, by these documented rules:
   - route phrases ('over X', 'around X'), which constrain the carried object's path.
 * Clauses group into steps: an action on 'it' (or 'that <noun>') continues the current step
   ("pick up X, pass over Y, then place it on Z" is one placement); an action on a new noun
-  phrase starts a new step, and several steps make a sequence. 'before <gerund>' adds a later
-  step, 'after <gerund>' an earlier one.
+  phrase starts a new step, and several steps make a sequence. 'A before B-ing' and
+  'before B-ing, A' do A first; 'A after B-ing' and 'after B-ing, A' do B first.
 * An arm phrase before the first action sets the arm of every step; 'use your left arm to'
   leads one action; elsewhere an arm phrase names the arm of the step it follows.
 * 'it' in a route ("detour to avoid passing over it") is the route's last landmark; elsewhere
@@ -22,6 +22,7 @@ Decides what the grammar leaves open, by these documented rules:
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 from robofollow.compiler import lf
@@ -31,6 +32,7 @@ from robofollow.compiler.syntax import (
 )
 from robofollow.errors import UnsupportedConstructError
 
+_WORD = re.compile(r"[A-Za-z'’-]+")
 _NOUN_PARENTS = {"cube": "block", "slab": "block"}
 _CONTAINERS = frozenset({"bowl"})
 _TRANSPORT_VERBS = frozenset({"place", "stack", "move", "take", "remove"})
@@ -88,7 +90,7 @@ class Draft:
     orientation: lf.Orientation | None = None
     orientation_column: int = 0
     last_landmark: lf.Ref | None = None
-    earlier: bool = False  # 'after <gerund>': this step goes before the previous one
+    marker: str | None = None  # 'before' / 'after' <gerund>: order relative to its main clause
 
 
 class Semantics:
@@ -102,9 +104,8 @@ class Semantics:
                                          length=self._word_length(column))
 
     def _word_length(self, column: int) -> int:
-        rest = self.text[column - 1:]
-        length = len(rest) - len(rest.lstrip("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ-'"))
-        return max(length, 1)
+        word = _WORD.match(self.text, column - 1)
+        return len(word.group()) if word else 1
 
     # ---------------------------------------------------------------- entry
     def instruction(self, syntax) -> lf.Instruction:
@@ -177,6 +178,8 @@ class Semantics:
                 if current is None and not drafts:
                     default_arm = segment.side
                 elif after_break and isinstance(following, Action):
+                    if following.lead_arm is not None and following.lead_arm.side != segment.side:
+                        raise self.fail(following.lead_arm.column, "two arms named for one action")
                     following.lead_arm = segment
                 else:
                     self.set_arm(current, segment)
@@ -197,9 +200,13 @@ class Semantics:
 
     @staticmethod
     def ordered(drafts: list[Draft]) -> list[Draft]:
-        result: list[Draft] = []
-        for draft in drafts:
-            result.insert(len(result) - 1 if draft.earlier and result else len(result), draft)
+        """Text order, except 'A after B-ing' (B first) and 'before B-ing, A' (A first)."""
+        result = list(drafts)
+        for index, draft in enumerate(drafts):
+            if draft.marker == "after" and index > 0:
+                result[index - 1], result[index] = result[index], result[index - 1]
+            elif draft.marker == "before" and index == 0 and len(drafts) > 1:
+                result[0], result[1] = result[1], result[0]
         return result
 
     def set_arm(self, draft: Draft | None, arm: ArmPhrase) -> None:
@@ -228,8 +235,7 @@ class Semantics:
                      and obj == current.object and toward is None and action.marker is None)
         started = None
         if not continues:
-            current = started = Draft(object=obj, column=action.column,
-                                      earlier=action.marker == "after")
+            current = started = Draft(object=obj, column=action.column, marker=action.marker)
         if destination is not None:
             current.destination, current.kind = destination, "place"
         if toward is not None:
@@ -315,7 +321,7 @@ class Semantics:
                 if meaning.kind != "route":
                     raise self.fail(part.column, "a route goes 'over X' or 'around X'")
                 mode, landmark = meaning.relation, meaning.landmark
-            elif isinstance(part, (NP, It)):
+            elif isinstance(part, (NP, It)):  # 'avoid X' names the landmark directly
                 mode = "via"
                 landmark = part if isinstance(part, It) else self.simple(part)
             else:
