@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import io
 import json
 import sys
 from importlib.metadata import version
@@ -54,9 +55,16 @@ def _parse_stream(stream, out) -> int:
     return status
 
 
+def _stdin_lines():
+    """Standard input as text; bytes that are not UTF-8 become U+FFFD (an unknown word)."""
+    if hasattr(sys.stdin, "buffer"):
+        return io.TextIOWrapper(sys.stdin.buffer, encoding="utf-8", errors="replace")
+    return sys.stdin
+
+
 def cmd_parse(args) -> int:
     if args.text == "-":
-        return _parse_stream(sys.stdin, sys.stdout)
+        return _parse_stream(_stdin_lines(), sys.stdout)
     return _parse_one(args.text, args)
 
 

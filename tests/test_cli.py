@@ -60,3 +60,12 @@ def test_console_script_help():
     result = subprocess.run(["robofollow", "parse", "--help"], capture_output=True, text=True)
     assert result.returncode == 0
     assert "robofollow parse -" in result.stdout and "--json" in result.stdout
+
+
+def test_parse_stdin_survives_bytes_that_are_not_utf8():
+    result = subprocess.run(["robofollow", "parse", "-"], input=b"Pick up the cube.\n\xff\xfe\n",
+                            capture_output=True)
+    records = [json.loads(line) for line in result.stdout.decode().splitlines()]
+    assert result.returncode == 1 and result.stderr == b""
+    assert records[0]["lf"]["type"] == "pick"
+    assert records[1]["error"]["type"] == "unknown_word"
