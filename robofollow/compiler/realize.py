@@ -151,52 +151,35 @@ class Realizer:
     def body(self, body: lf.Body, top: bool = False) -> str:
         if not isinstance(body, lf.Sequence):
             among = self.among(body) if top else None
-            if among is not None:
-                return among
-            return self.command(body, fronted_arm=True)
+            return among if among is not None else self.command(body, self.s.arm)
         form = self.s.sequence
         if form in ("before", "after") and len(body.steps) != 2:
             form = "then"
-        steps = [self.command(step, fronted_arm=False) for step in body.steps]
-        gerunds = [self.gerund_command(step) for step in body.steps]
+        # an arm phrase in front of a sequence would name the arm of every step
+        arm_mode = "lead" if self.s.arm == "fronted" else self.s.arm
+        steps = [self.command(step, arm_mode) for step in body.steps]
+        gerunds = [self.command(step, "trailing", gerund=True) for step in body.steps]
         return str(self.t.sequence(form, steps, gerunds))
 
     # ---------------------------------------------------------------- commands
-    def command(self, c: lf.Pick | lf.Place | lf.Push, fronted_arm: bool,
-                obj: str | None = None) -> str:
+    def command(self, c: lf.Pick | lf.Place | lf.Push, arm_mode: str, obj: str | None = None,
+                gerund: bool = False) -> str:
+        """One command; `arm_mode` is lead, trailing or fronted; `gerund` for 'before X-ing'."""
         obj = obj if obj is not None else self.ref(c.object)
         tail: list[str] = []
         if isinstance(c, lf.Pick):
-            clause = str(self.t.pick(self.s, obj))
+            clause = str(self.t.pick(self.s, obj, gerund))
         elif isinstance(c, lf.Push):
-            clause = str(self.t.push(self.s, obj, self.ref(c.toward)))
+            clause = str(self.t.push(self.s, obj, self.ref(c.toward), gerund))
         else:
-            clause, tail = self.place(c, obj, gerund=False)
-        return self.with_arm(c.arm, clause, tail, fronted_arm)
-
-    def with_arm(self, arm: str | None, clause: str, tail: list[str], fronted_arm: bool) -> str:
-        text = clause
-        mode = self.s.arm if fronted_arm or self.s.arm != "fronted" else "lead"
-        if arm is not None:
-            if mode == "lead":
-                text = f"{self.t.arm_lead(arm)} {clause}"
-            elif mode == "fronted":
-                text = f"{self.t.arm_fronted(arm)} {clause}"
-            else:
-                text = f"{clause} {self.t.arm_trailing(self.s, arm)}"
-        return text + "".join(tail)
-
-    def gerund_command(self, c: lf.Pick | lf.Place | lf.Push) -> str:
-        obj = self.ref(c.object)
-        tail: list[str] = []
-        if isinstance(c, lf.Pick):
-            clause = str(self.t.pick(self.s, obj, gerund=True))
-        elif isinstance(c, lf.Push):
-            clause = str(self.t.push(self.s, obj, self.ref(c.toward), gerund=True))
-        else:
-            clause, tail = self.place(c, obj, gerund=True)
+            clause, tail = self.place(c, obj, gerund)
         if c.arm is not None:
-            clause = f"{clause} {self.t.arm_trailing(self.s, c.arm)}"
+            if arm_mode == "lead":
+                clause = f"{self.t.arm_lead(c.arm)} {clause}"
+            elif arm_mode == "fronted":
+                clause = f"{self.t.arm_fronted(c.arm)} {clause}"
+            else:
+                clause = f"{clause} {self.t.arm_trailing(self.s, c.arm)}"
         return clause + "".join(tail)
 
     def place(self, c: lf.Place, obj: str, gerund: bool) -> tuple[str, list[str]]:
@@ -232,7 +215,8 @@ class Realizer:
         domain = " ".join([self.premod(x) for x in others] +
                           [_PLURALS[self.noun(c.object.noun)]])
         obj = f"the one {_EXTREME_POSITIONS[extremes[0].extreme]}"
-        return f"among the {domain}, {self.command(c, fronted_arm=False, obj=obj)}"
+        arm_mode = "lead" if self.s.arm == "fronted" else self.s.arm
+        return f"among the {domain}, {self.command(c, arm_mode, obj=obj)}"
 
     # ---------------------------------------------------------------- conditions
     def condition(self, c: lf.Condition) -> str:
@@ -303,35 +287,35 @@ class Realizer:
     def ref(self, ref: lf.Ref, determiner: bool = True, relative: bool = False) -> str:
         """A reference; `relative` puts every relation in a relative clause."""
         premods: list[str] = []
-        posts: list[str] = []  # predicate phrases after the noun
-        starts: list[str] = []  # how the first post is introduced: "" (a pp) or "that is"
+        posts: list[tuple[str, str]] = []  # (how it opens when first: "" or "that is", phrase)
         for c in ref.constraints:
-            negated = getattr(c, "negated", False) or isinstance(c, lf.NotKind)
-            if isinstance(c, lf.Related):
-                phrase = self.relation_phrase(c.relation, c.landmark)
-                as_pp = not relative and (self.s.negation == "pp" if negated
-                                          else self.s.relation == "pp")
-                posts.append(("not " if negated else "") + phrase)
-                starts.append("" if as_pp else "that is")
-            elif isinstance(c, lf.ExtremeIs) and not negated and self.s.extreme in ("post", "relative"):
-                if self.s.extreme == "post" and not relative:
-                    posts.append(_EXTREME_POSITIONS[c.extreme])
-                    starts.append("")
-                else:
-                    posts.append(c.extreme)
-                    starts.append("that is")
-            elif negated and self.s.negation != "non":
-                posts.append("not " + (self.predicate(c) if not isinstance(c, lf.ExtremeIs)
-                                       else c.extreme))
-                starts.append("that is")
-            else:
+            post = self.postmodifier(c, relative)
+            if post is None:
                 premods.append(self.premod(c))
+            else:
+                posts.append(post)
         words = premods + [self.noun(ref.noun)]
         if posts:
-            first = f"{starts[0]} {posts[0]}".strip()
-            words.append(" and ".join([first] + posts[1:]))
+            (opening, first), rest = posts[0], [phrase for _, phrase in posts[1:]]
+            words.append(" and ".join([f"{opening} {first}".strip()] + rest))
         return ("the " if determiner else "") + " ".join(words)
 
+    def postmodifier(self, c: lf.Constraint, relative: bool) -> tuple[str, str] | None:
+        """A constraint said after the noun, or None when the style says it before."""
+        negated = getattr(c, "negated", False) or isinstance(c, lf.NotKind)
+        if isinstance(c, lf.Related):
+            as_pp = not relative and (self.s.negation == "pp" if negated
+                                      else self.s.relation == "pp")
+            phrase = ("not " if negated else "") + self.relation_phrase(c.relation, c.landmark)
+            return ("" if as_pp else "that is", phrase)
+        if isinstance(c, lf.ExtremeIs) and not negated and self.s.extreme in ("post", "relative"):
+            if self.s.extreme == "post" and not relative:
+                return ("", _EXTREME_POSITIONS[c.extreme])
+            return ("that is", c.extreme)
+        if negated and self.s.negation != "non":
+            word = c.extreme if isinstance(c, lf.ExtremeIs) else self.predicate(c)
+            return ("that is", "not " + word)
+        return None
 
 def realize(instruction: lf.Instruction, style: str = "plain") -> str:
     """English for a logical form, in one of STYLES."""
