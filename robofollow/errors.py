@@ -61,3 +61,42 @@ class UnsupportedConstructError(InstructionError):
     """Grammatical, but with no meaning RoboFollow can represent (a dangling 'it', two arms, ...)."""
 
     code = "unsupported"
+
+
+class SpecError(RoboFollowError):
+    """One problem in a spec file, at a 1-based line and column."""
+
+    def __init__(self, code: str, message: str, *, file: str, line: int, column: int,
+                 source_line: str = "", length: int = 1):
+        super().__init__(message)
+        self.code = code
+        self.message = message
+        self.file = file
+        self.line = line
+        self.column = column
+        self.source_line = source_line
+        self.length = max(length, 1)
+
+    def __str__(self) -> str:
+        return f"{self.file}:{self.line}:{self.column}: error[{self.code}]: {self.message}"
+
+    def render(self) -> str:
+        if not self.source_line:
+            return str(self)
+        return (f"{self}\n  {self.source_line}\n"
+                f"  {' ' * (self.column - 1)}{'^' * self.length}")
+
+
+class SpecErrors(RoboFollowError):
+    """Every problem found in a set of spec files, reported together."""
+
+    code = "spec"
+
+    def __init__(self, errors: list[SpecError]):
+        super().__init__(f"{len(errors)} error(s) in the specs")
+        self.errors = errors
+
+    def render(self) -> str:
+        count = len(self.errors)
+        return "\n".join([e.render() for e in self.errors] +
+                         [f"{count} error{'s' if count != 1 else ''} in the specs"])

@@ -1,0 +1,525 @@
+"""Load .rf spec files into a validated Spec; report every problem at once.
+
+Each problem is a SpecError with a code ('unknown-object', 'layout-cycle', ...) and the place it
+was written; `load_spec` raises SpecErrors listing all of them.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from functools import cache
+from pathlib import Path
+
+from lark import Lark, Token, Tree, UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
+
+from robofollow.compiler import lf
+from robofollow.compiler.parser import parse
+from robofollow.compiler.spec import (
+    Body, Expected, ExpectedStep, Jitter, Layout, Placed, Scene, Source, Spec, SplitRule, Task,
+)
+from robofollow.errors import InstructionError, SpecError, SpecErrors
+from robofollow.resources import grammar_text
+
+SPEC_SUFFIX = ".rf"
+WORDINGS = frozenset({"referents", "routes", "orientation", "conditions", "branches"})
+BOWL_FLOOR = 0.005  # m: height of a bowl's inner floor above its bottom
+
+# per body kind: required size attributes -> half extents
+_SIZES = {
+    "cube": ("half",), "slab": ("half",), "label": ("half",),
+    "cylinder": ("radius", "half_height"), "bowl": ("radius", "half_height"),
+    "sphere": ("radius",),
+}
+_COMMON = ("color", "rgb")
+_PHYSICS = ("mass", "friction")
+_SETTINGS = {"table_height": 0.74}
+
+
+@cache
+def _parser() -> Lark:
+    return Lark(grammar_text("spec.lark"), parser="lalr", strict=True, propagate_positions=True)
+
+
+def spec_files(paths: list[Path] | Path) -> list[Path]:
+    """The .rf files named, or found below the folders named, in a stable order."""
+    files: list[Path] = []
+    for path in [paths] if isinstance(paths, Path) else paths:
+        files.extend(sorted(path.rglob(f"*{SPEC_SUFFIX}")) if path.is_dir() else [path])
+    return files
+
+
+def load_spec(paths: list[Path] | Path) -> Spec:
+    """Parse and validate spec files; raise SpecErrors with every problem found."""
+    return _Loader().load(spec_files(paths))
+
+
+class _Loader:
+    def __init__(self):
+        self.errors: list[SpecError] = []
+        self.lines: dict[str, list[str]] = {}
+        self.file = ""
+        self.labels: dict[str, Token] = {}
+
+    # ---------------------------------------------------------------- errors
+    def error(self, code: str, message: str, where: Token | Tree | Source, length: int | None = None):
+        if isinstance(where, Source):
+            file, line, column, size = where.file, where.line, where.column, 1
+        elif isinstance(where, Token):
+            file, line, column, size = self.file, where.line, where.column, len(where)
+        else:
+            file, line, column = self.file, where.meta.line, where.meta.column
+            size = 1
+        lines = self.lines.get(file, [])
+        source_line = lines[line - 1] if 0 < line <= len(lines) else ""
+        self.errors.append(SpecError(code, message, file=file, line=line, column=column,
+                                     source_line=source_line, length=length or size))
+
+    def source(self, token: Token) -> Source:
+        return Source(file=self.file, line=token.line, column=token.column)
+
+    # ---------------------------------------------------------------- files
+    def load(self, files: list[Path]) -> Spec:
+        if not files:
+            raise SpecErrors([SpecError("no-specs", "no .rf spec files found", file="<specs>",
+                                        line=1, column=1)])
+        digest = hashlib.sha256()
+        scenes: dict[str, Scene] = {}
+        for path in files:
+            self.file = str(path)
+            try:
+                text = path.read_text(encoding="utf-8")
+            except (OSError, UnicodeDecodeError) as error:
+                self.errors.append(SpecError("unreadable", str(error), file=self.file, line=1,
+                                             column=1))
+                continue
+            digest.update(path.name.encode() + b"\0" + text.encode() + b"\0")
+            self.lines[self.file] = text.splitlines()
+            tree = self.syntax(text)
+            for node in tree.children if tree is not None else ():
+                scene = self.scene(node)
+                if scene is None:
+                    continue
+                if scene.id in scenes:
+                    self.error("duplicate-scene", f"scene {scene.id!r} is defined twice",
+                               node.children[0])
+                scenes[scene.id] = scene
+        if self.errors:
+            raise SpecErrors(self.errors)
+        return Spec(scenes=scenes, digest=digest.hexdigest())
+
+    def syntax(self, text: str) -> Tree | None:
+        try:
+            return _parser().parse(text)
+        except UnexpectedEOF as error:
+            lines = text.splitlines() or [""]
+            self.errors.append(SpecError(
+                "syntax", "the file ends too early" + _expected(error.expected), file=self.file,
+                line=len(lines), column=len(lines[-1]) + 1, source_line=lines[-1]))
+        except UnexpectedToken as error:
+            self.error("syntax", f"unexpected {error.token!s:.30}" + _expected(error.expected),
+                       error.token)
+        except UnexpectedCharacters as error:
+            self.error("syntax", f"unexpected character {text[error.pos_in_stream]!r}"
+                       + _expected(error.allowed), Source(file=self.file, line=error.line,
+                                                          column=error.column))
+        return None
+
+    # ---------------------------------------------------------------- scenes
+    def scene(self, node: Tree) -> Scene | None:
+        name, title, *items = node.children
+        errors_before = len(self.errors)
+        points: dict[str, tuple[float, float]] = {}
+        bodies: dict[str, Body] = {}
+        settings = dict(_SETTINGS)
+        by_kind: dict[str, list[Tree]] = {}
+        for item in items:
+            by_kind.setdefault(item.data, []).append(item)
+        for item in by_kind.get("point", []):
+            point, coordinates = item.children
+            if point in points:
+                self.error("duplicate-point", f"point {point!s} is defined twice", point)
+            points[str(point)] = _coordinates(coordinates)
+        for item in by_kind.get("setting", []):
+            self.setting(item, settings)
+        for item in by_kind.get("body", []):
+            body = self.body(item)
+            if body is not None:
+                if body.id in bodies:
+                    self.error("duplicate-object", f"{body.id!r} is defined twice", item.children[1])
+                bodies[body.id] = body
+        jitter = {}
+        for item in by_kind.get("jitter", []):
+            target, attributes = item.children[0], item.children[1:]
+            if target != "*" and target not in bodies:
+                self.error("unknown-object", f"no object named {target!s}", target)
+            jitter[str(target)] = self.jitter(attributes)
+        table = settings["table_height"]
+        layouts = _LayoutResolver(self, bodies, points, table).resolve(by_kind.get("layout", []))
+        tasks = tuple(t for t in (self.task(item, str(name), bodies, layouts)
+                                  for item in by_kind.get("task", [])) if t is not None)
+        splits = {}
+        for item in by_kind.get("split", []):
+            rule = self.split(item, layouts)
+            if rule.level in splits:
+                self.error("duplicate-split", f"two split rules for {rule.level}", item.children[0])
+            splits[rule.level] = rule
+        if len(self.errors) > errors_before:
+            return None
+        return Scene(id=str(name), title=title[1:-1], bodies=bodies, points=points, jitter=jitter,
+                     layouts=layouts, tasks=tasks, splits=splits, table_height=table)
+
+    def setting(self, item: Tree, settings: dict[str, float]) -> None:
+        name, value = item.children
+        if name not in settings:
+            self.error("unknown-setting", f"unknown setting {name!s} (known: "
+                                          f"{', '.join(sorted(settings))})", name)
+        elif value.data != "number":
+            self.error("bad-value", f"{name!s} takes a number", name)
+        else:
+            settings[str(name)] = float(value.children[0])
+
+    def attributes(self, nodes: list[Tree], allowed: tuple[str, ...]) -> dict[str, Tree]:
+        found: dict[str, Tree] = {}
+        for node in nodes:
+            key = node.children[0]
+            if key not in allowed:
+                self.error("unknown-attribute", f"unknown attribute {key!s} here (expected one "
+                                                f"of: {', '.join(allowed)})", key)
+            elif key in found:
+                self.error("duplicate-attribute", f"{key!s} is given twice", key)
+            else:
+                found[str(key)] = node
+        return found
+
+    def number(self, node: Tree, low: float = -math.inf, high: float = math.inf) -> float | None:
+        value = node.children[1]
+        if value.data != "number":
+            self.error("bad-value", f"{node.children[0]!s} takes a number", node.children[0])
+            return None
+        number = float(value.children[0])
+        if not low <= number <= high:
+            self.error("bad-value", f"{node.children[0]!s} must be in [{low}, {high}]",
+                       value.children[0])
+            return None
+        return number
+
+    def numbers(self, node: Tree, count: int | None, low=-math.inf, high=math.inf):
+        value = node.children[1]
+        items = value.children if value.data == "values" else [value]
+        numbers = [float(i.children[0]) for i in items if i.data == "number"]
+        if len(numbers) != len(items) or (count is not None and len(numbers) != count) or not all(
+                low <= n <= high for n in numbers):
+            size = f"{count} numbers" if count else "numbers"
+            self.error("bad-value", f"{node.children[0]!s} takes {size} in [{low}, {high}]",
+                       node.children[0])
+            return None
+        return tuple(numbers)
+
+    def body(self, item: Tree) -> Body | None:
+        kind_node, name, kind, *attribute_nodes = item.children
+        fixture = kind_node.children[0] == "fixture"
+        if kind not in _SIZES:
+            self.error("unknown-kind", f"unknown kind {kind!s} (expected one of: "
+                                       f"{', '.join(_SIZES)})", kind)
+            return None
+        allowed = _SIZES[str(kind)] + _COMMON + (() if fixture else _PHYSICS)
+        found = self.attributes(attribute_nodes, allowed)
+        missing = [a for a in allowed if a not in found]
+        if missing:
+            self.error("missing-attribute", f"{name!s} needs {', '.join(missing)}", name)
+            return None
+        color = found["color"].children[1]
+        if color.data != "name" or color.children[0] not in lf.Color.__args__:
+            self.error("bad-value", f"color must be one of {', '.join(lf.Color.__args__)}",
+                       found["color"].children[0])
+            return None
+        rgb = self.numbers(found["rgb"], 3, 0.0, 1.0)
+        if kind in ("slab", "label"):
+            half = self.numbers(found["half"], 3, 0.0005, 1.0)
+        elif kind == "cube":
+            side = self.number(found["half"], 0.0005, 1.0)
+            half = None if side is None else (side, side, side)
+        else:
+            radius = self.number(found["radius"], 0.0005, 1.0)
+            height = (self.number(found["half_height"], 0.0005, 1.0) if "half_height" in found
+                      else radius)
+            half = None if radius is None or height is None else (radius, radius, height)
+        physics = {key: self.number(found[key], 1e-6, 100.0) for key in _PHYSICS if key in found}
+        if rgb is None or half is None or None in physics.values():
+            return None
+        return Body(id=str(name), kind=str(kind), fixture=fixture, color=str(color.children[0]),
+                    rgb=rgb, half_extents=half, **physics)
+
+    def jitter(self, attributes: list[Tree]) -> Jitter:
+        found = self.attributes(attributes, ("x", "y"))
+        ranges = {}
+        for axis, node in found.items():
+            value = node.children[1]
+            low, high = (float(t) for t in value.children) if value.data == "interval" else (1, 0)
+            if low > high:
+                self.error("bad-value", f"{axis} takes an interval [low, high]", node.children[0])
+            ranges[axis] = (low, high)
+        return Jitter(**ranges)
+
+    # ---------------------------------------------------------------- tasks and splits
+    def task(self, item: Tree, scene: str, bodies: dict[str, Body],
+             layouts: dict[str, Layout]) -> Task | None:
+        label, layout, *rest = item.children
+        strings = [t for t in rest if isinstance(t, Token)]
+        expect = next((t for t in rest if isinstance(t, Tree)), None)
+        ok = True
+        if label in self.labels:
+            previous = self.labels[str(label)]
+            self.error("duplicate-label", f"task {label!s} is already defined (line "
+                                          f"{previous.line})", label)
+            ok = False
+        self.labels.setdefault(str(label), label)
+        if layout not in layouts:
+            self.error("undefined-layout", f"no layout named {layout!s} in {scene}", layout)
+            ok = False
+        forms = []
+        for string in strings:
+            try:
+                forms.append(parse(string[1:-1]))
+            except InstructionError as error:
+                self.error(f"instruction-{error.code}", error.message,
+                           Source(file=self.file, line=string.line,
+                                  column=string.column + error.column), error.length)
+                ok = False
+        expected = self.expected(expect, bodies) if expect is not None else None
+        if not ok or (expect is not None and expected is None):
+            return None
+        return Task(label=str(label), scene=scene, layout=str(layout),
+                    paraphrases=tuple(s[1:-1] for s in strings), forms=tuple(forms),
+                    expect=expected, source=self.source(label),
+                    paraphrase_sources=tuple(self.source(s) for s in strings))
+
+    def expected(self, node: Tree, bodies: dict[str, Body]) -> Expected | None:
+        branch = None
+        steps = []
+        errors_before = len(self.errors)
+        for child in node.children:
+            if child.data == "branch":
+                branch = str(child.children[0])
+                continue
+            arm, source, *rest = child.children
+            if arm not in lf.Arm.__args__:
+                self.error("bad-value", "the arm is 'left' or 'right'", arm)
+            names = [source] + [t for t in rest if isinstance(t, Token) and t.type == "NAME"]
+            waypoints = [w for w in rest if isinstance(w, Tree) and w.data == "waypoint"]
+            names += [w.children[1] for w in waypoints]
+            for token in names:
+                if token not in bodies:
+                    self.error("unknown-object", f"no object named {token!s}", token)
+            relation = next((str(t.children[0]) for t in rest
+                             if isinstance(t, Tree) and t.data == "relation"), None)
+            yaw = next((float(t.children[0]) for t in rest
+                        if isinstance(t, Tree) and t.data == "yaw"), None)
+            target = str(rest[-1]) if child.data == "push" else (
+                str(names[1]) if child.data == "place" else None)
+            steps.append(dict(action=child.data, arm=str(arm), source=str(source),
+                              relation=relation, target=target,
+                              waypoints=tuple((str(w.children[0]), str(w.children[1]))
+                                              for w in waypoints), yaw_degrees=yaw))
+        if len(self.errors) > errors_before:
+            return None
+        return Expected(branch=branch, steps=tuple(ExpectedStep(**s) for s in steps))
+
+    def split(self, item: Tree, layouts: dict[str, Layout]) -> SplitRule:
+        level, *attribute_nodes = item.children
+        found = self.attributes(attribute_nodes, ("layouts", "wordings", "max", "rounds", "seed"))
+        values: dict = {"level": str(level)}
+        for key in ("layouts", "wordings"):
+            if key in found:
+                node = found[key].children[1]
+                names = node.children if node.data == "values" else [node]
+                tokens = [n.children[0] for n in names if n.data == "name"]
+                known = layouts if key == "layouts" else WORDINGS
+                for token in tokens:
+                    if token not in known:
+                        code = "undefined-layout" if key == "layouts" else "unknown-wording"
+                        self.error(code, f"unknown {key[:-1]} {token!s} (known: "
+                                         f"{', '.join(sorted(known))})", token)
+                values[key] = tuple(str(t) for t in tokens)
+        for key, field in (("max", "max_tasks"), ("rounds", "rounds"), ("seed", "seed")):
+            if key in found:
+                number = self.number(found[key], 0 if key == "seed" else 1, 1e9)
+                if number is not None:
+                    values[field] = int(number)
+        return SplitRule(**values)
+
+
+def _expected(terminals) -> str:
+    names = sorted(str(t).strip('"').lower() for t in terminals)[:12]
+    return f" (expected: {', '.join(names)})" if names else ""
+
+
+def _coordinates(node: Tree) -> tuple[float, float]:
+    return float(node.children[0]), float(node.children[1])
+
+
+class _LayoutResolver:
+    """Layouts written as placements or as operations on another layout -> absolute poses."""
+
+    def __init__(self, loader: _Loader, bodies: dict[str, Body],
+                 points: dict[str, tuple[float, float]], table: float):
+        self.loader = loader
+        self.bodies = bodies
+        self.points = points
+        self.table = table
+        self.raw: dict[str, Tree] = {}
+        self.done: dict[str, dict[str, tuple] | None] = {}
+
+    def resolve(self, nodes: list[Tree]) -> dict[str, Layout]:
+        for node in nodes:
+            name = node.children[0]
+            if name in self.raw:
+                self.loader.error("duplicate-layout", f"layout {name!s} is defined twice", name)
+            self.raw[str(name)] = node
+        layouts = {}
+        for name, node in self.raw.items():
+            arrangement = self.arrangement(name, ())
+            if arrangement is None:
+                continue
+            placed = self.poses(arrangement, node.children[0])
+            if placed is not None:
+                base = node.children[1] if len(node.children) > 1 and isinstance(
+                    node.children[1], Token) else None
+                layouts[name] = Layout(name=name, base=str(base) if base else None, placed=placed)
+        return layouts
+
+    def known(self, token: Token) -> bool:
+        if token not in self.bodies:
+            self.loader.error("unknown-object", f"no object named {token!s}", token)
+            return False
+        return True
+
+    def position(self, node) -> tuple[float, float] | None:
+        if isinstance(node, Token):
+            if node not in self.points:
+                self.loader.error("unknown-point", f"no point named {node!s}", node)
+                return None
+            return self.points[str(node)]
+        return _coordinates(node)
+
+    def arrangement(self, name: str, chain: tuple[str, ...]) -> dict[str, tuple] | None:
+        """body -> ("at", (x, y)) | ("on", body) | ("in", body), or None if it failed."""
+        if name in self.done:
+            return self.done[name]
+        node = self.raw[name]
+        if name in chain:
+            self.loader.error("layout-cycle", "layouts derive from each other: "
+                              + " -> ".join(chain[chain.index(name):] + (name,)),
+                              node.children[0])
+            self.done[name] = None
+            return None
+        rest = node.children[1:]
+        arrangement: dict[str, tuple] = {}
+        if rest and isinstance(rest[0], Token):
+            base, rest = rest[0], rest[1:]
+            if base not in self.raw:
+                self.loader.error("undefined-layout", f"no layout named {base!s}", base)
+                self.done[name] = None
+                return None
+            inherited = self.arrangement(str(base), chain + (name,))
+            if inherited is None:
+                self.done[name] = None
+                return None
+            arrangement = dict(inherited)
+        errors_before = len(self.loader.errors)
+        for op in rest:
+            self.apply(op, arrangement)
+        result = arrangement if len(self.loader.errors) == errors_before else None
+        self.done[name] = result
+        return result
+
+    def apply(self, op: Tree, arrangement: dict[str, tuple]) -> None:
+        kind, args = op.data, op.children
+        if not all(self.known(t) for t in args if isinstance(t, Token) and not (
+                kind in ("at", "move") and t is args[1])):
+            return
+        first = str(args[0])
+        if kind in ("swap", "move", "remove", "put_on", "put_in") and first not in arrangement:
+            self.loader.error("not-in-layout", f"{first} is not in this layout", args[0])
+            return
+        if kind == "at":
+            position = self.position(args[1])
+            if position is not None:
+                arrangement[first] = ("at", position)
+        elif kind == "move":
+            position = self.position(args[1])
+            if position is not None:
+                arrangement[first] = ("at", position)
+        elif kind in ("on", "put_on"):
+            arrangement[first] = ("on", str(args[1]))
+        elif kind in ("in_", "put_in"):
+            if self.bodies[str(args[1])].kind != "bowl":
+                self.loader.error("not-a-container", f"{args[1]!s} is not a bowl", args[1])
+                return
+            arrangement[first] = ("in", str(args[1]))
+        elif kind == "swap":
+            second = str(args[1])
+            if first == second:
+                self.loader.error("swap-self", f"swap names {first} twice", args[1])
+            elif second not in arrangement:
+                self.loader.error("not-in-layout", f"{second} is not in this layout", args[1])
+            else:
+                arrangement[first], arrangement[second] = arrangement[second], arrangement[first]
+        elif kind == "remove":
+            resting = [b for b, (how, where) in arrangement.items() if how != "at" and where == first]
+            if resting:
+                self.loader.error("support-removed", f"{', '.join(resting)} rests on {first}",
+                                  args[0])
+                return
+            del arrangement[first]
+
+    def poses(self, arrangement: dict[str, tuple], where: Token) -> dict[str, Placed] | None:
+        placed: dict[str, Placed] = {}
+
+        def pose(body: str, chain: tuple[str, ...]) -> Placed | None:
+            if body in placed:
+                return placed[body]
+            how, value = arrangement[body]
+            half = self.bodies[body].half_extents[2]
+            if how == "at":
+                result = Placed(x=value[0], y=value[1], z=self.table + half)
+            elif value in chain or value == body:
+                self.loader.error("support-cycle", f"{body} and {value} rest on each other", where)
+                return None
+            elif value not in arrangement:
+                self.loader.error("not-in-layout", f"{body} rests on {value}, which is not in "
+                                                   "this layout", where)
+                return None
+            else:
+                support = pose(value, chain + (body,))
+                if support is None:
+                    return None
+                bottom = support.z - self.bodies[value].half_extents[2]
+                z = (support.z + self.bodies[value].half_extents[2] + half if how == "on"
+                     else bottom + BOWL_FLOOR + half)
+                result = Placed(x=support.x, y=support.y, z=z, support=value, relation=how)
+            placed[body] = result
+            return result
+
+        for body in arrangement:
+            if pose(body, ()) is None:
+                return None
+        self.check_overlaps(placed, where)
+        return placed
+
+    def check_overlaps(self, placed: dict[str, Placed], where: Token) -> None:
+        on_table = sorted(b for b, p in placed.items()
+                          if p.relation == "table" and self.bodies[b].kind != "label")
+        for i, a in enumerate(on_table):
+            for b in on_table[i + 1:]:
+                if _footprints_overlap(self.bodies[a], placed[a], self.bodies[b], placed[b]):
+                    self.loader.error("overlap", f"{a} and {b} overlap in layout {where!s}", where)
+
+
+def _footprints_overlap(a: Body, pa: Placed, b: Body, pb: Placed) -> bool:
+    round_kinds = ("sphere", "cylinder", "bowl")
+    if a.kind in round_kinds and b.kind in round_kinds:
+        return math.hypot(pa.x - pb.x, pa.y - pb.y) < a.half_extents[0] + b.half_extents[0]
+    return (abs(pa.x - pb.x) < a.half_extents[0] + b.half_extents[0]
+            and abs(pa.y - pb.y) < a.half_extents[1] + b.half_extents[1])
