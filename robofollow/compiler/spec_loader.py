@@ -111,14 +111,16 @@ class _Loader:
     def syntax(self, text: str) -> Tree | None:
         try:
             return _parser().parse(text)
-        except UnexpectedEOF as error:
-            lines = text.splitlines() or [""]
-            self.errors.append(SpecError(
-                "syntax", "the file ends too early" + _expected(error.expected), file=self.file,
-                line=len(lines), column=len(lines[-1]) + 1, source_line=lines[-1]))
-        except UnexpectedToken as error:
-            self.error("syntax", f"unexpected {error.token!s:.30}" + _expected(error.expected),
-                       error.token)
+        except (UnexpectedEOF, UnexpectedToken) as error:
+            if isinstance(error, UnexpectedEOF) or error.token.type == "$END":
+                lines = text.rstrip().splitlines() or [""]
+                self.errors.append(SpecError(
+                    "syntax", "the file ends too early" + _expected(error.expected),
+                    file=self.file, line=len(lines), column=len(lines[-1]) + 1,
+                    source_line=lines[-1]))
+            else:
+                self.error("syntax", f"unexpected {error.token!s:.30}"
+                           + _expected(error.expected), error.token)
         except UnexpectedCharacters as error:
             self.error("syntax", f"unexpected character {text[error.pos_in_stream]!r}"
                        + _expected(error.allowed), Source(file=self.file, line=error.line,
@@ -155,12 +157,14 @@ class _Loader:
                 self.error("unknown-object", f"no object named {target!s}", target)
             jitter[str(target)] = self.jitter(attributes)
         table = settings["table_height"]
-        layouts = _LayoutResolver(self, bodies, points, table).resolve(by_kind.get("layout", []))
-        tasks = tuple(t for t in (self.task(item, str(name), bodies, layouts)
+        resolver = _LayoutResolver(self, bodies, points, table)
+        layouts = resolver.resolve(by_kind.get("layout", []))
+        defined = set(resolver.raw)  # a layout that failed to resolve is reported once, there
+        tasks = tuple(t for t in (self.task(item, str(name), bodies, defined)
                                   for item in by_kind.get("task", [])) if t is not None)
         splits = {}
         for item in by_kind.get("split", []):
-            rule = self.split(item, layouts)
+            rule = self.split(item, defined)
             if rule.level in splits:
                 self.error("duplicate-split", f"two split rules for {rule.level}", item.children[0])
             splits[rule.level] = rule
@@ -231,8 +235,8 @@ class _Loader:
             return None
         color = found["color"].children[1]
         if color.data != "name" or color.children[0] not in lf.Color.__args__:
-            self.error("bad-value", f"color must be one of {', '.join(lf.Color.__args__)}",
-                       found["color"].children[0])
+            where = color.children[0] if color.data == "name" else found["color"].children[0]
+            self.error("bad-value", f"color must be one of {', '.join(lf.Color.__args__)}", where)
             return None
         rgb = self.numbers(found["rgb"], 3, 0.0, 1.0)
         if kind in ("slab", "label"):
@@ -264,7 +268,7 @@ class _Loader:
 
     # ---------------------------------------------------------------- tasks and splits
     def task(self, item: Tree, scene: str, bodies: dict[str, Body],
-             layouts: dict[str, Layout]) -> Task | None:
+             layouts: set[str]) -> Task | None:
         label, layout, *rest = item.children
         strings = [t for t in rest if isinstance(t, Token)]
         expect = next((t for t in rest if isinstance(t, Tree)), None)
@@ -326,7 +330,7 @@ class _Loader:
             return None
         return Expected(branch=branch, steps=tuple(ExpectedStep(**s) for s in steps))
 
-    def split(self, item: Tree, layouts: dict[str, Layout]) -> SplitRule:
+    def split(self, item: Tree, layouts: set[str]) -> SplitRule:
         level, *attribute_nodes = item.children
         found = self.attributes(attribute_nodes, ("layouts", "wordings", "max", "rounds", "seed"))
         values: dict = {"level": str(level)}
@@ -351,8 +355,12 @@ class _Loader:
 
 
 def _expected(terminals) -> str:
-    names = sorted(str(t).strip('"').lower() for t in terminals)[:12]
-    return f" (expected: {', '.join(names)})" if names else ""
+    """Expected terminals as a reader knows them: '}' rather than RBRACE."""
+    names = []
+    for name in sorted(terminals):
+        pattern = _parser().get_terminal(name).pattern
+        names.append(repr(pattern.value) if pattern.type == "str" else name.lower())
+    return f" (expected: {', '.join(sorted(names)[:12])})" if names else ""
 
 
 def _coordinates(node: Tree) -> tuple[float, float]:
