@@ -1,0 +1,210 @@
+"""Logical form + layout -> Behaviour: which arm does what, to which object, where.
+
+Referring expressions resolve against a World by geometry: first the plain constraints (noun,
+colour, kind, relations), then the comparatives (larger / smaller, leftmost / ...) among what
+is left, each of which must lead the runner-up by a named margin. No referent, or a tie, is a
+GroundingError that lists the candidates.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from robofollow.compiler import lf, notation
+from robofollow.compiler.spec import Model
+from robofollow.compiler.world import EXTREME_AXES, EXTREME_MARGIN, SIZE_MARGIN, World
+from robofollow.errors import RoboFollowError
+
+TABLE = "table"  # the table as a landmark ('not touching the table')
+
+
+class Step(Model):
+    """One grounded command."""
+
+    action: Literal["pick", "place", "push"]
+    arm: lf.Arm | None
+    source: str
+    relation: lf.PlaceRelation | None = None
+    target: str | None = None
+    waypoints: tuple[tuple[Literal["via", "avoid"], str], ...] = ()
+    yaw_degrees: float | None = None
+
+
+class Behaviour(Model):
+    """What an instruction asks for in one layout."""
+
+    steps: tuple[Step, ...]
+    condition: bool | None = None  # a conditional's condition, evaluated in the layout
+    branch: Literal["then", "otherwise"] | None = None
+    other: tuple[Step, ...] | None = None  # the branch not taken, when it grounds
+
+
+class GroundingError(RoboFollowError):
+    """An instruction that does not pick out one behaviour in a layout."""
+
+    def __init__(self, code: str, message: str, candidates: tuple[str, ...] = ()):
+        super().__init__(message)
+        self.code = code
+        self.message = message
+        self.candidates = candidates
+
+
+def kind_matches(world: World, body: str, noun: str) -> bool:
+    """Whether a body can be called by a noun ('object' is any movable body)."""
+    if body == TABLE:
+        return noun == TABLE
+    spec = world.bodies[body]
+    if noun == "object":
+        return not spec.fixture
+    if noun == "block":
+        return spec.kind in ("cube", "slab")
+    return spec.kind == noun
+
+
+def _describe(ref: lf.Ref) -> str:
+    return notation.ref(ref)
+
+
+class Grounder:
+    """Grounds logical forms in one world."""
+
+    def __init__(self, world: World):
+        self.world = world
+
+    # ---------------------------------------------------------------- referents
+    def domain(self, noun: str) -> list[str]:
+        if noun == TABLE:
+            return [TABLE]
+        return [b for b in self.world.bodies if kind_matches(self.world, b, noun)]
+
+    def referents(self, ref: lf.Ref) -> list[str]:
+        """Every body the description fits."""
+        candidates = self.domain(ref.noun)
+        comparatives = []
+        for constraint in ref.constraints:
+            if isinstance(constraint, (lf.SizeIs, lf.ExtremeIs)):
+                comparatives.append(constraint)
+            else:
+                candidates = [b for b in candidates if self.satisfies(b, constraint)]
+        for constraint in comparatives:
+            candidates = self.compare(candidates, constraint, ref)
+        return candidates
+
+    def resolve(self, ref: lf.Ref) -> str:
+        """The one body a description picks out."""
+        found = self.referents(ref)
+        if not found:
+            raise GroundingError("no-referent", f"nothing in layout {self.world.layout.name} "
+                                                f"is {_describe(ref)}")
+        if len(found) > 1:
+            raise GroundingError("ambiguous", f"{_describe(ref)} could be any of "
+                                              f"{', '.join(found)} in layout "
+                                              f"{self.world.layout.name}", tuple(found))
+        return found[0]
+
+    def satisfies(self, body: str, constraint: lf.Constraint) -> bool:
+        if body == TABLE:
+            return False
+        if isinstance(constraint, lf.ColorIs):
+            return (self.world.bodies[body].color == constraint.color) != constraint.negated
+        if isinstance(constraint, lf.NotKind):
+            return not kind_matches(self.world, body, constraint.noun)
+        if isinstance(constraint, lf.Related):
+            landmark = self.resolve(constraint.landmark)
+            if landmark == body:
+                return False
+            relation = constraint.relation
+            if landmark == TABLE:
+                relation = "touching" if relation in ("on", "touching") else relation
+                holds = relation == "touching" and self.world.related(body, relation, TABLE)
+            else:
+                holds = self.world.related(body, relation, landmark)
+            return holds != constraint.negated
+        # a comparative on one body: is it the extreme among the bodies of its kind?
+        return body in self.compare(self.domain(self._noun_of(body)), constraint, None)
+
+    def _noun_of(self, body: str) -> str:
+        return self.world.bodies[body].kind
+
+    def compare(self, candidates: list[str], constraint, ref: lf.Ref | None) -> list[str]:
+        """Apply 'larger', 'leftmost', 'non-leftmost' ... to a candidate list."""
+        if len(candidates) <= 1:
+            return [] if getattr(constraint, "negated", False) else candidates
+        if isinstance(constraint, lf.SizeIs):
+            sign = 1.0 if constraint.size == "larger" else -1.0
+            values = {b: sign * self.world.bodies[b].volume for b in candidates}
+            ranked = sorted(candidates, key=lambda b: -values[b])
+            best, second = values[ranked[0]], values[ranked[1]]
+            if abs(best - second) < SIZE_MARGIN * max(abs(best), abs(second)):
+                self._tie(ranked[:2], constraint, ref)
+            return ranked[:1]
+        axis, sign = EXTREME_AXES[constraint.extreme]
+        values = {b: sign * (self.world.poses[b].x, self.world.poses[b].y)[axis]
+                  for b in candidates}
+        ranked = sorted(candidates, key=lambda b: -values[b])
+        if values[ranked[0]] - values[ranked[1]] < EXTREME_MARGIN:
+            self._tie(ranked[:2], constraint, ref)
+        return ranked[1:] if constraint.negated else ranked[:1]
+
+    def _tie(self, tied: list[str], constraint, ref: lf.Ref | None) -> None:
+        word = getattr(constraint, "extreme", None) or getattr(constraint, "size", "")
+        raise GroundingError("ambiguous", f"no single {word} one: {', '.join(tied)} are within "
+                                          "tolerance of each other", tuple(tied))
+
+    # ---------------------------------------------------------------- conditions
+    def holds(self, condition: lf.Condition) -> bool:
+        if isinstance(condition, lf.Exists):
+            return bool(self.referents(condition.ref)) != condition.negated
+        return self.satisfies(self.resolve(condition.subject), condition.property)
+
+    # ---------------------------------------------------------------- behaviour
+    def behaviour(self, instruction: lf.Instruction) -> Behaviour:
+        if not isinstance(instruction, lf.Conditional):
+            return Behaviour(steps=self.steps(instruction))
+        truth = self.holds(instruction.condition)
+        taken, other = ((instruction.then, instruction.otherwise) if truth
+                        else (instruction.otherwise, instruction.then))
+        try:
+            other_steps = self.steps(other) if other is not None else ()
+        except GroundingError:
+            other_steps = None
+        return Behaviour(steps=self.steps(taken) if taken is not None else (), condition=truth,
+                         branch="then" if truth else "otherwise", other=other_steps)
+
+    def steps(self, body: lf.Body) -> tuple[Step, ...]:
+        if isinstance(body, lf.Sequence):
+            return tuple(self.step(command) for command in body.steps)
+        return (self.step(body),)
+
+    def step(self, command: lf.Pick | lf.Place | lf.Push) -> Step:
+        source = self.resolve(command.object)
+        if source == TABLE or self.world.bodies[source].fixture:
+            raise GroundingError("unsupported", f"{source} is fixed and cannot be moved")
+        if isinstance(command, lf.Pick):
+            return Step(action="pick", arm=command.arm, source=source)
+        if isinstance(command, lf.Push):
+            return Step(action="push", arm=command.arm, source=source,
+                        target=self.resolve(command.toward))
+        target = self.resolve(command.destination.landmark)
+        waypoints = tuple(sorted({(w.mode, self.resolve(w.landmark)) for w in command.route}))
+        return Step(action="place", arm=command.arm, source=source,
+                    relation=command.destination.relation, target=target, waypoints=waypoints,
+                    yaw_degrees=self.yaw(source, command.orientation))
+
+    def yaw(self, body: str, orientation: lf.Orientation | None) -> float | None:
+        """The final yaw (deg, modulo 180) that puts the named side the named way."""
+        if orientation is None:
+            return None
+        hx, hy, _ = self.world.bodies[body].half_extents
+        if abs(hx - hy) < 1e-6:
+            raise GroundingError("unsupported", f"{body} has no long side to orient")
+        long_axis_on_y = hy > hx  # at yaw 0
+        facing_on_y = orientation.facing in ("front", "back")
+        # the short sides face along the long axis; the long sides across it
+        wants_long_axis_on_y = facing_on_y == (orientation.side == "short")
+        return 0.0 if wants_long_axis_on_y == long_axis_on_y else 90.0
+
+
+def ground(instruction: lf.Instruction, world: World) -> Behaviour:
+    """The behaviour an instruction asks for in a world."""
+    return Grounder(world).behaviour(instruction)

@@ -1,0 +1,106 @@
+"""A layout as geometry: where each body is, and which relations hold between bodies.
+
+Relations come from positions and sizes with the named tolerances below, never from names.
+Pure Python: the simulator and the oracle share these definitions without importing MuJoCo.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+from robofollow.compiler.spec import Body, Scene
+
+RELATION_CONE_DEG = 45.0  # deg: a direction relation holds within this angle of its axis
+RELATION_RANGE = 0.20  # m: how far "to the left of X" reaches when it picks out an object
+ON_XY_TOLERANCE = 0.02  # m: centre offset that still counts as "on top of"
+CONTACT_TOLERANCE = 0.005  # m: gap that still counts as resting on / touching
+EXTREME_MARGIN = 0.02  # m: the leftmost (...) object leads the runner-up by at least this
+SIZE_MARGIN = 0.10  # a larger object's volume exceeds the runner-up's by this fraction
+
+# direction of each horizontal relation in the world frame (+x right, +y away from the robot)
+DIRECTIONS = {"left_of": (-1.0, 0.0), "right_of": (1.0, 0.0), "behind": (0.0, 1.0),
+              "in_front_of": (0.0, -1.0)}
+EXTREME_AXES = {"leftmost": (0, -1.0), "rightmost": (0, 1.0), "frontmost": (1, -1.0),
+                "backmost": (1, 1.0)}
+
+
+@dataclass(frozen=True, slots=True)
+class Pose:
+    x: float
+    y: float
+    z: float
+
+
+class World:
+    """The bodies of one layout, at nominal positions plus optional jitter offsets."""
+
+    def __init__(self, scene: Scene, layout: str,
+                 offsets: dict[str, tuple[float, float]] | None = None):
+        self.scene = scene
+        self.layout = scene.layouts[layout]
+        self.table = scene.table_height
+        self.bodies: dict[str, Body] = {b: scene.bodies[b] for b in self.layout.placed}
+        offsets = offsets or {}
+        self.poses: dict[str, Pose] = {}
+        for body in self.layout.placed:
+            self._pose(body, offsets)
+
+    def _pose(self, body: str, offsets) -> Pose:
+        if body in self.poses:
+            return self.poses[body]
+        placed = self.layout.placed[body]
+        if placed.support is None:
+            dx, dy = offsets.get(body, (0.0, 0.0))
+            pose = Pose(placed.x + dx, placed.y + dy, placed.z)
+        else:  # a stacked or contained body follows its support
+            support = self._pose(placed.support, offsets)
+            pose = Pose(support.x, support.y, placed.z)
+        self.poses[body] = pose
+        return pose
+
+    @property
+    def movable(self) -> list[str]:
+        return [b for b, body in self.bodies.items() if not body.fixture]
+
+    def bottom(self, body: str) -> float:
+        return self.poses[body].z - self.bodies[body].half_extents[2]
+
+    def top(self, body: str) -> float:
+        return self.poses[body].z + self.bodies[body].half_extents[2]
+
+    def related(self, a: str, relation: str, b: str) -> bool:
+        """Whether `a <relation> b` holds ('table' may stand as b for 'touching')."""
+        if relation == "touching":
+            if b == "table":
+                return abs(self.bottom(a) - self.table) <= CONTACT_TOLERANCE
+            return self._touching(a, b)
+        pa, pb = self.poses[a], self.poses[b]
+        if relation == "on":
+            return (math.hypot(pa.x - pb.x, pa.y - pb.y) <= ON_XY_TOLERANCE
+                    and abs(self.bottom(a) - self.top(b)) <= CONTACT_TOLERANCE)
+        if relation == "in":
+            bowl = self.bodies[b]
+            return (bowl.kind == "bowl"
+                    and math.hypot(pa.x - pb.x, pa.y - pb.y) <= bowl.half_extents[0]
+                    and self.bottom(a) < self.top(b))
+        distance = math.hypot(pa.x - pb.x, pa.y - pb.y)
+        if relation == "next_to":
+            return 0 < distance <= RELATION_RANGE
+        return in_cone(pa.x - pb.x, pa.y - pb.y, DIRECTIONS[relation]) and distance <= RELATION_RANGE
+
+    def _touching(self, a: str, b: str) -> bool:
+        pa, pb = self.poses[a], self.poses[b]
+        ha, hb = self.bodies[a].half_extents, self.bodies[b].half_extents
+        gaps = (abs(pa.x - pb.x) - ha[0] - hb[0], abs(pa.y - pb.y) - ha[1] - hb[1],
+                abs(pa.z - pb.z) - ha[2] - hb[2])
+        return max(gaps) <= CONTACT_TOLERANCE
+
+
+def in_cone(dx: float, dy: float, direction: tuple[float, float]) -> bool:
+    """Whether the offset (dx, dy) points within RELATION_CONE_DEG of `direction`."""
+    length = math.hypot(dx, dy)
+    if length < 1e-9:
+        return False
+    cosine = (dx * direction[0] + dy * direction[1]) / length
+    return cosine >= math.cos(math.radians(RELATION_CONE_DEG)) - 1e-12
