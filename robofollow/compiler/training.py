@@ -1,0 +1,128 @@
+"""Check training tasks against their layouts: one behaviour per task, as `expect` says.
+
+Every paraphrase of a task must ground to the same behaviour. Paraphrases may leave the arm
+unnamed ("Move the blue slab ..."); the task's arm is the one the others name, and naming two
+arms is a disagreement.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+from robofollow.compiler.grounding import Behaviour, GroundingError, Step, ground
+from robofollow.compiler.spec import Expected, Scene, Source, Spec, Task
+from robofollow.compiler.world import World
+from robofollow.errors import SpecError, SpecErrors
+
+
+class TaskProblem(Exception):
+    """A training task whose paraphrase (by index) fails to ground or disagrees."""
+
+    def __init__(self, code: str, message: str, index: int):
+        super().__init__(message)
+        self.code = code
+        self.message = message
+        self.index = index
+
+
+def describe_steps(steps: tuple[Step, ...]) -> str:
+    """Steps in the spec's `expect` syntax."""
+    parts = []
+    for step in steps:
+        words = [step.action, step.arm or "?", step.source]
+        if step.action == "place":
+            words += [step.relation, step.target]
+            words += [f"{mode} {body}" for mode, body in step.waypoints]
+            if step.yaw_degrees is not None:
+                words.append(f"yaw {step.yaw_degrees:g}")
+        elif step.action == "push":
+            words += ["towards", step.target]
+        parts.append(" ".join(words))
+    return ", ".join(parts) or "nothing"
+
+
+def describe(behaviour: Behaviour) -> str:
+    prefix = f"{behaviour.branch}: " if behaviour.branch else ""
+    return prefix + describe_steps(behaviour.steps)
+
+
+def expected_behaviour(expected: Expected) -> Behaviour:
+    steps = tuple(Step(action=s.action, arm=s.arm, source=s.source, relation=s.relation,
+                       target=s.target, waypoints=tuple(sorted(s.waypoints)),
+                       yaw_degrees=s.yaw_degrees) for s in expected.steps)
+    return Behaviour(steps=steps, branch=expected.branch)
+
+
+def _without_arms(behaviour: Behaviour) -> Behaviour:
+    steps = tuple(s.model_copy(update={"arm": None}) for s in behaviour.steps)
+    return behaviour.model_copy(update={"steps": steps, "other": None, "condition": None})
+
+
+def task_behaviour(task: Task, scene: Scene) -> Behaviour:
+    """The behaviour a training task asks for on its layout; raises TaskProblem."""
+    world = World(scene, task.layout)
+    grounded = []
+    for index, form in enumerate(task.forms):
+        try:
+            grounded.append(ground(form, world))
+        except GroundingError as error:
+            raise TaskProblem(error.code, error.message, index) from None
+    first = grounded[0]
+    arms: list[str | None] = [None] * len(first.steps)
+    for index, behaviour in enumerate(grounded):
+        if _without_arms(behaviour) != _without_arms(first):
+            raise TaskProblem("paraphrases-disagree", f"paraphrase {index + 1} means "
+                              f"{describe(behaviour)}, the first means {describe(first)}", index)
+        for step_index, step in enumerate(behaviour.steps):
+            if step.arm is not None and arms[step_index] not in (None, step.arm):
+                raise TaskProblem("paraphrases-disagree", f"paraphrase {index + 1} names the "
+                                  f"{step.arm} arm, an earlier one the {arms[step_index]} arm",
+                                  index)
+            arms[step_index] = arms[step_index] or step.arm
+    if None in arms:
+        raise TaskProblem("no-arm", "no paraphrase says which arm to use", 0)
+    steps = tuple(s.model_copy(update={"arm": arm})
+                  for s, arm in zip(first.steps, arms, strict=True))
+    return first.model_copy(update={"steps": steps})
+
+
+@lru_cache(maxsize=64)
+def _file_lines(file: str) -> tuple[str, ...]:
+    try:
+        return tuple(Path(file).read_text(encoding="utf-8").splitlines())
+    except OSError:
+        return ()
+
+
+def spec_error(code: str, message: str, where: Source, length: int = 1) -> SpecError:
+    lines = _file_lines(where.file)
+    source_line = lines[where.line - 1] if 0 < where.line <= len(lines) else ""
+    return SpecError(code, message, file=where.file, line=where.line, column=where.column,
+                     source_line=source_line, length=length)
+
+
+def check_training(spec: Spec) -> dict[str, Behaviour]:
+    """Every training task's behaviour by label; SpecErrors lists every task that fails."""
+    behaviours: dict[str, Behaviour] = {}
+    errors: list[SpecError] = []
+    for scene in spec.scenes.values():
+        for task in scene.tasks:
+            try:
+                behaviour = task_behaviour(task, scene)
+            except TaskProblem as problem:
+                where = task.paraphrase_sources[problem.index]
+                errors.append(spec_error(problem.code, problem.message, where,
+                                         len(task.paraphrases[problem.index]) + 2))
+                continue
+            if task.expect is not None:
+                expected = expected_behaviour(task.expect)
+                if (expected.branch, expected.steps) != (behaviour.branch, behaviour.steps):
+                    errors.append(spec_error(
+                        "expect-mismatch", f"the instructions mean {describe(behaviour)}, but "
+                        f"expect says {describe(expected)}", task.source, len(task.label)))
+                    continue
+            behaviours[task.label] = behaviour
+    if errors:
+        raise SpecErrors(errors)
+    return behaviours

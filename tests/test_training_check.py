@@ -1,0 +1,71 @@
+"""Training tasks ground to one behaviour each: the reference's, for the shipped benchmark."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from robofollow.compiler.spec_loader import load_spec
+from robofollow.compiler.training import check_training, describe
+from robofollow.errors import SpecErrors
+from tests.test_spec_loader import edit
+
+SPECS = Path(__file__).resolve().parent.parent / "specs"
+GOLDEN = json.loads((Path(__file__).parent / "data" / "training_behaviours.json").read_text())
+
+
+@pytest.fixture(scope="module")
+def behaviours():
+    return check_training(load_spec(SPECS))
+
+
+def test_every_training_task_grounds_to_the_reference_behaviour(behaviours):
+    assert len(GOLDEN) == 75
+    assert {label: describe(b) for label, b in behaviours.items()} == GOLDEN
+
+
+def test_unnamed_arm_paraphrases_take_the_arm_the_others_name(behaviours):
+    assert describe(behaviours["l_pick5_around2_to1_short_right"]) == \
+        "place left blue_slab on green_label avoid red_slab yaw 90"
+
+
+def test_conditionals_record_the_condition_and_the_other_branch(behaviours):
+    chosen = behaviours["s41_if_blue_right_of_red_then_l_pick_else_r_stack"]
+    assert (chosen.condition, chosen.branch) == (False, "otherwise")
+    assert [(s.action, s.arm, s.source) for s in chosen.other] == [("pick", "left", "blue_sphere")]
+
+
+def check(tmp_path, text):
+    (tmp_path / "bad.rf").write_text(text)
+    with pytest.raises(SpecErrors) as caught:
+        check_training(load_spec(tmp_path))
+    return caught.value.errors
+
+
+TASK = '"Pick up the red cube with your left arm."'
+
+# (replacement for the task's paraphrase and expect lines, code, line, column)
+PROBLEMS = [
+    ('"Pick up the green cube with your left arm."', "no-referent", 14, 9),
+    ('"Pick up the cube with your left arm."', "ambiguous", 14, 9),
+    (TASK + '\n        "Pick up the blue cube with your left arm."', "paraphrases-disagree", 15, 9),
+    (TASK + '\n        "Pick up the red cube with your right arm."', "paraphrases-disagree", 15, 9),
+    ('"Pick up the red cube."', "no-arm", 14, 9),
+    ('"Pick up the bowl with your left arm."', "unsupported", 14, 9),
+    ('"Pick up the red cube with your left arm."\n        expect pick left blue_cube',
+     "expect-mismatch", 13, 10),
+]
+
+
+@pytest.mark.parametrize("paraphrases,code,line,column", PROBLEMS,
+                         ids=[code for _, code, _, _ in PROBLEMS])
+def test_task_problems_are_reported_at_the_paraphrase(tmp_path, paraphrases, code, line, column):
+    text = edit(f"{TASK}\n        expect pick left red_cube", paraphrases)
+    errors = check(tmp_path, text)
+    assert [(e.code, e.line, e.column) for e in errors] == [(code, line, column)]
+    assert errors[0].render().splitlines()[0].startswith(f"{errors[0].file}:{line}:{column}:")
+
+
+def test_ambiguity_lists_the_candidates(tmp_path):
+    errors = check(tmp_path, edit(TASK, '"Pick up the cube with your left arm."'))
+    assert "red_cube" in errors[0].message and "blue_cube" in errors[0].message
