@@ -1,0 +1,78 @@
+"""Goal DAGs: stage chains with the default profile's weights and gating."""
+
+import json
+from itertools import pairwise
+from pathlib import Path
+
+import networkx as nx
+import pytest
+
+from robofollow.compiler.goals import goal_graph, graph_to_dict, stage_order
+from robofollow.compiler.grounding import Behaviour, Step
+from robofollow.compiler.spec_loader import load_spec
+from robofollow.compiler.training import check_training
+
+SPECS = Path(__file__).resolve().parent.parent / "specs"
+
+
+@pytest.fixture(scope="module")
+def behaviours():
+    return check_training(load_spec(SPECS))
+
+
+def test_every_training_graph_is_a_gated_chain_whose_weights_sum_to_one(behaviours):
+    for behaviour in behaviours.values():
+        graph = goal_graph(behaviour)
+        order = stage_order(graph)
+        assert nx.is_directed_acyclic_graph(graph)
+        assert list(graph.edges) == list(pairwise(order))
+        assert sum(graph.nodes[n]["weight"] for n in order) == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize("label,names,weights", [
+    ("pickup_yellow_block_1_left", ["source_grounding", "finish"], [0.8, 0.2]),
+    ("place_yellow_block_1_behind_red_cylinder",
+     ["source_grounding", "relative_placement", "finish"], [0.4, 0.4, 0.2]),
+    ("stack_left_cube_on_red_cylinder", ["source_grounding", "stack", "finish"], [0.4, 0.4, 0.2]),
+    ("push_left_cube_to_red_cylinder", ["push_contact", "push", "finish"], [0.4, 0.4, 0.2]),
+    ("place_right_cube_in_green_bowl", ["source_grounding", "place_in_bowl", "finish"],
+     [0.4, 0.4, 0.2]),
+    ("r_pick2_via4_to6_short_front", ["source_grounding", "route", "orientation"],
+     [0.3, 0.3, 0.4]),
+    ("s41_seq_l_bowl_then_r_green_cylinder", ["source_grounding", "source_grounding", "finish"],
+     [0.4, 0.4, 0.2]),
+])
+def test_stage_names_and_weights_follow_the_action(behaviours, label, names, weights):
+    graph = goal_graph(behaviours[label])
+    order = stage_order(graph)
+    assert [graph.nodes[n]["name"] for n in order] == names
+    assert [graph.nodes[n]["weight"] for n in order] == weights
+
+
+def test_sequences_chain_a_then_b(behaviours):
+    graph = goal_graph(behaviours["s41_seq_r_green_cylinder_then_l_bowl"])
+    first, second = [graph.nodes[n]["intent"]["params"] for n in stage_order(graph)[:2]]
+    assert (first["arm"], first["object"]) == ("right", "green_cylinder")
+    assert (second["arm"], second["object"]) == ("left", "red_cube")
+
+
+def test_nodes_carry_predicates_with_parameters(behaviours):
+    graph = goal_graph(behaviours["r_pick2_via4_to6_short_front"])
+    route = graph.nodes["route"]["execution"]
+    assert route["predicate"] == "carried_over"
+    assert route["params"]["waypoints"] == [["via", "yellow_slab"]]
+    assert graph.nodes["outcome"]["execution"]["params"]["yaw_deg"] == 0.0
+    assert graph.graph["profile"]["name"] == "default"
+
+
+def test_a_branch_that_asks_for_nothing_is_scored_on_staying_still():
+    graph = goal_graph(Behaviour(steps=(), condition=False, branch="otherwise"))
+    assert [graph.nodes[n]["name"] for n in stage_order(graph)] == ["finish"]
+
+
+def test_graph_json_is_deterministic(behaviours):
+    step = Step(action="pick", arm="left", source="red_cube")
+    one = json.dumps(graph_to_dict(goal_graph(Behaviour(steps=(step,)))), sort_keys=True)
+    two = json.dumps(graph_to_dict(goal_graph(Behaviour(steps=(step,)))), sort_keys=True)
+    assert one == two
+    assert json.loads(one)["edges"] == [["source", "finish"]]
