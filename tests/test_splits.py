@@ -1,0 +1,72 @@
+"""Split generation for L0 and L1: counts, repertoire, reasons, determinism."""
+
+from pathlib import Path
+
+import pytest
+
+from robofollow.compiler.splits import episode_seed, generate, signature
+from robofollow.compiler.spec_loader import load_spec
+from robofollow.compiler.training import check_training
+
+SPECS = Path(__file__).resolve().parent.parent / "specs"
+TARGETS = {"scene1": (16, 8), "scene2": (16, 24), "scene3": (16, 40), "scene4": (27, 14)}
+
+
+@pytest.fixture(scope="module")
+def compiled():
+    spec = load_spec(SPECS)
+    training = check_training(spec)
+    return spec, training, generate(spec, training)
+
+
+def test_counts_reach_the_targets(compiled):
+    spec, _, splits = compiled
+    for scene, (l0, l1) in TARGETS.items():
+        assert len(splits.of(scene, "L0")) == l0
+        assert len(splits.of(scene, "L1")) >= l1
+
+
+def test_kept_tasks_are_inside_the_repertoire_and_unique(compiled):
+    spec, training, splits = compiled
+    for task in splits.tasks:
+        scene = spec.scenes[task.scene]
+        repertoire = {signature(training[t.label]) for t in scene.tasks}
+        assert signature(task.behaviour) in repertoire
+    assert len({t.id for t in splits.tasks}) == len(splits.tasks)
+    assert len({(t.layout, t.instruction) for t in splits.tasks}) == len(splits.tasks)
+
+
+def test_l1_uses_training_strings_on_changed_layouts(compiled):
+    spec, _, splits = compiled
+    strings = {p for t in spec.tasks for p in t.paraphrases}
+    for task in splits.tasks:
+        if task.level == "L1":
+            assert task.instruction in strings
+            assert task.layout in spec.scenes[task.scene].splits["L1"].layouts
+
+
+def test_every_rejection_says_why(compiled):
+    _, _, splits = compiled
+    reasons = {r.reason.split(":")[0] for r in splits.rejected}
+    assert all(r.reason for r in splits.rejected)
+    assert {"no-referent", "ambiguous", "outside the training repertoire"} <= reasons
+    off_way = [r for r in splits.rejected if "no longer on the way" in r.reason]
+    assert off_way and all(r.layout == "scene3_3" or r.layout == "scene3_4" for r in off_way)
+
+
+def test_a_changed_layout_can_change_the_referent(compiled):
+    _, _, splits = compiled
+    task = next(t for t in splits.tasks
+                if t.id == "scene1/L1/pickup_yellow_block_1_right@scene1_1")
+    assert task.behaviour.steps[0].source == "yellow_block_3"
+
+
+def test_generation_is_deterministic(compiled):
+    spec, training, splits = compiled
+    assert generate(spec, training).model_dump_json() == splits.model_dump_json()
+
+
+def test_seeds_follow_the_task_id():
+    assert episode_seed("scene1/L0/x", 1, 42) == episode_seed("scene1/L0/x", 1, 42)
+    assert episode_seed("scene1/L0/x", 2, 42) - episode_seed("scene1/L0/x", 1, 42) == 100
+    assert episode_seed("scene1/L0/x", 1, 42) != episode_seed("scene1/L0/y", 1, 42)
