@@ -4,9 +4,10 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.compiler.splits import episode_seed, generate, signature
+from robofollow.compiler.splits import episode_seed, generate, passes_over, signature
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.training import check_training
+from robofollow.compiler.world import World
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
 TARGETS = {"scene1": (16, 8), "scene2": (16, 24), "scene3": (16, 40), "scene4": (27, 14)}
@@ -30,8 +31,8 @@ def test_kept_tasks_are_inside_the_repertoire_and_unique(compiled):
     spec, training, splits = compiled
     for task in splits.tasks:
         scene = spec.scenes[task.scene]
-        repertoire = {signature(training[t.label]) for t in scene.tasks}
-        assert signature(task.behaviour) in repertoire
+        repertoire = {signature(training[t.label], World(scene, t.layout)) for t in scene.tasks}
+        assert signature(task.behaviour, World(scene, task.layout)) in repertoire
     assert len({t.id for t in splits.tasks}) == len(splits.tasks)
     assert len({(t.layout, t.instruction) for t in splits.tasks}) == len(splits.tasks)
 
@@ -70,3 +71,12 @@ def test_seeds_follow_the_task_id():
     assert episode_seed("scene1/L0/x", 1, 42) == episode_seed("scene1/L0/x", 1, 42)
     assert episode_seed("scene1/L0/x", 2, 42) - episode_seed("scene1/L0/x", 1, 42) == 100
     assert episode_seed("scene1/L0/x", 1, 42) != episode_seed("scene1/L0/y", 1, 42)
+
+
+def test_routes_compare_by_the_bodies_passed_over(compiled):
+    spec, training, _ = compiled
+    world = World(spec.scenes["scene3"], "default")
+    around_red = training["l_pick5_around2_to1_short_right"].steps[0]
+    assert passes_over(around_red, world) == ("green_slab",)
+    via_yellow = training["r_pick2_via4_to6_short_front"].steps[0]
+    assert passes_over(via_yellow, world) == ("yellow_slab",)

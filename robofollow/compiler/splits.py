@@ -5,8 +5,8 @@
   ground to exactly one behaviour inside the training repertoire.
 
 A behaviour is inside the repertoire when some training task of the scene performs the same
-steps (arm, action, source, relation, target, waypoints, final yaw) and every route waypoint
-still lies on the way from the source to the destination, as it does in training.
+steps (arm, action, source, relation, target, bodies passed over, final yaw) and every route
+waypoint still lies on the way from the source to the destination, as it does in training.
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from robofollow.compiler.training import describe
 from robofollow.compiler.world import World
 
 ROUTE_CORRIDOR = 0.03  # m: a waypoint may lie this far outside the source-destination x span
+COLUMN_TOLERANCE = 0.03  # m: bodies this close in x stand in one column (a detour's choice)
 
 
 class TestTask(Model):
@@ -52,10 +53,25 @@ class Splits(Model):
         return [t for t in self.tasks if t.scene == scene and t.level == level]
 
 
-def signature(behaviour: Behaviour) -> tuple:
-    """What the repertoire compares: the steps performed (not the words, not the branch)."""
-    return tuple((s.arm, s.action, s.source, s.relation, s.target, s.waypoints, s.yaw_degrees)
-                 for s in behaviour.steps)
+def passes_over(step: Step, world: World) -> tuple[str, ...]:
+    """The bodies the carried object is routed over: each 'via' body, and for 'avoid X' the
+    other body on the way in X's column (the detour the words ask for)."""
+    over = set()
+    for mode, body in step.waypoints:
+        if mode == "via":
+            over.add(body)
+            continue
+        x = world.poses[body].x
+        over.update(b for b in world.movable if b not in (body, step.source, step.target)
+                    and abs(world.poses[b].x - x) <= COLUMN_TOLERANCE)
+    return tuple(sorted(over))
+
+
+def signature(behaviour: Behaviour, world: World) -> tuple:
+    """What the repertoire compares: the steps performed, routes as the bodies passed over
+    (not the words, not the branch)."""
+    return tuple((s.arm, s.action, s.source, s.relation, s.target, passes_over(s, world),
+                  s.yaw_degrees) for s in behaviour.steps)
 
 
 def episode_seed(task_id: str, round_index: int, base: int) -> int:
@@ -77,7 +93,8 @@ class _Generator:
     def __init__(self, scene: Scene, training: dict[str, Behaviour]):
         self.scene = scene
         self.training = training
-        self.repertoire = {signature(training[t.label]) for t in scene.tasks}
+        self.repertoire = {signature(training[t.label], World(scene, t.layout))
+                           for t in scene.tasks}
         self.tasks: list[TestTask] = []
         self.rejected: list[Rejection] = []
         self.seen: dict[tuple[str, str], str] = {}
@@ -108,7 +125,7 @@ class _Generator:
         except GroundingError as error:
             self.reject(level, layout, instruction, origin, f"{error.code}: {error.message}")
             return
-        if signature(behaviour) not in self.repertoire:
+        if signature(behaviour, world) not in self.repertoire:
             self.reject(level, layout, instruction, origin,
                         f"outside the training repertoire: {describe(behaviour)}")
             return
