@@ -3,6 +3,9 @@
 - L0: each training task's first paraphrase on its training layout.
 - L1: training first paraphrases on the split rule's changed layouts, kept when they still
   ground to exactly one behaviour inside the training repertoire.
+- L2: the training layouts with new wording from the rule's generators (wordings.py): a
+  logical form no training instruction has, said in words training instructions use.
+- L3: the kept L1 tasks reworded the same way on their changed layouts.
 
 A behaviour is inside the repertoire when some training task of the scene performs the same
 steps (arm, action, source, relation, target, bodies passed over, final yaw) and every route
@@ -12,16 +15,15 @@ waypoint still lies on the way from the source to the destination, as it does in
 from __future__ import annotations
 
 import hashlib
-from typing import Literal
-
 from robofollow.compiler import lf
 from robofollow.compiler.grounding import Behaviour, GroundingError, Step, ground
+from robofollow.compiler.realize import STYLES, realize
 from robofollow.compiler.spec import Level, Model, Scene, Spec
 from robofollow.compiler.training import describe
-from robofollow.compiler.world import World
+from robofollow.compiler.wordings import GENERATORS, concepts
+from robofollow.compiler.world import COLUMN_TOLERANCE, World
 
 ROUTE_CORRIDOR = 0.03  # m: a waypoint may lie this far outside the source-destination x span
-COLUMN_TOLERANCE = 0.03  # m: bodies this close in x stand in one column (a detour's choice)
 
 
 class TestTask(Model):
@@ -89,10 +91,27 @@ def off_route(step: Step, world: World) -> list[str]:
     return [body for _, body in step.waypoints if not low <= world.poses[body].x <= high]
 
 
+def _variants(form: lf.Instruction, world: World, wordings: tuple[str, ...]):
+    """(wording, form) from each generator alone, then from each ordered pair of the
+    generators that reword one aspect ('referents' alone already varies every object)."""
+    for wording in wordings:
+        for novel in GENERATORS[wording](form, world):
+            yield wording, novel
+    composable = [w for w in wordings if w != "referents"]
+    for index, first in enumerate(composable):
+        for second in composable[index + 1:]:
+            for middle in GENERATORS[first](form, world):
+                for novel in GENERATORS[second](middle, world):
+                    yield f"{first}+{second}", novel
+
+
 class _Generator:
-    def __init__(self, scene: Scene, training: dict[str, Behaviour]):
+    def __init__(self, scene: Scene, training: dict[str, Behaviour], training_forms: set[str],
+                 vocabulary: set[tuple[str, str]]):
         self.scene = scene
         self.training = training
+        self.training_forms = training_forms
+        self.vocabulary = vocabulary
         self.repertoire = {signature(training[t.label], World(scene, t.layout))
                            for t in scene.tasks}
         self.tasks: list[TestTask] = []
@@ -114,8 +133,8 @@ class _Generator:
         return behaviour.model_copy(update={"steps": steps})
 
     def consider(self, level: Level, layout: str, instruction: str, form: lf.Instruction,
-                 origin: str, wording: str) -> None:
-        key = (layout, instruction)
+                 origin: str, wording: str, task_id: str | None = None) -> None:
+        key = (layout, instruction if wording == "training" else lf.to_json(form))
         if key in self.seen:
             self.reject(level, layout, instruction, origin, f"duplicate of {self.seen[key]}")
             return
@@ -134,8 +153,8 @@ class _Generator:
             self.reject(level, layout, instruction, origin,
                         f"waypoint {', '.join(stray)} is no longer on the way")
             return
-        suffix = "" if level == "L0" else f"@{layout}"
-        task_id = f"{self.scene.id}/{level}/{origin}{suffix}"
+        if task_id is None:
+            task_id = f"{self.scene.id}/{level}/{origin}" + ("" if level == "L0" else f"@{layout}")
         self.seen[key] = task_id
         self.tasks.append(TestTask(id=task_id, scene=self.scene.id, level=level, layout=layout,
                                    instruction=instruction, form=form, behaviour=behaviour,
@@ -154,15 +173,87 @@ class _Generator:
                               "training")
 
 
+    def reworded(self, level: Level, layout: str, form: lf.Instruction, origin: str,
+                 wordings: tuple[str, ...]) -> None:
+        """Candidates from each generator, and from each pair of generators in rule order."""
+        world = World(self.scene, layout)
+        rule = self.scene.splits[level]
+        for wording, novel in _variants(form, world, wordings):
+            if rule.max_tasks is not None and sum(
+                    t.origin == origin and t.level == level for t in self.tasks) >= rule.max_tasks:
+                return  # this origin alone fills the level; the cap would drop the rest
+            data = lf.to_json(novel)
+            digest = hashlib.sha256(data.encode()).hexdigest()
+            text, unknown = self.speak(novel, int(digest[:8], 16))
+            if data in self.training_forms:
+                self.reject(level, layout, text, origin, "a training task has this form")
+            elif unknown:
+                words = ", ".join(sorted(value for _, value in unknown))
+                self.reject(level, layout, text, origin, f"words no training instruction "
+                                                         f"uses: {words}")
+            else:
+                self.consider(level, layout, text, novel, origin, wording,
+                              f"{self.scene.id}/{level}/{origin}@{layout}/{wording}-"
+                              f"{digest[:8]}")
+
+    def speak(self, form: lf.Instruction, pick: int) -> tuple[str, set]:
+        """English for a form in the first style (from `pick` on) that uses only training
+        words; else the first style's text and its unknown words."""
+        styles = sorted(STYLES)
+        first = None
+        for offset in range(len(styles)):
+            text = realize(form, styles[(pick + offset) % len(styles)])
+            unknown = concepts(text) - self.vocabulary
+            if not unknown:
+                return text, set()
+            first = first or (text, unknown)
+        return first
+
+    def cap(self, level: Level) -> None:
+        """Keep at most the rule's `max` tasks of a level: round robin over the training tasks
+        they come from (each origin's tasks in id-digest order); reject the rest."""
+        rule = self.scene.splits.get(level)
+        tasks = [t for t in self.tasks if t.level == level]
+        if rule is None or rule.max_tasks is None or len(tasks) <= rule.max_tasks:
+            return
+        queues: dict[str, list[TestTask]] = {}
+        for task in sorted(tasks, key=lambda t: hashlib.sha256(t.id.encode()).hexdigest()):
+            queues.setdefault(task.origin, []).append(task)
+        chosen: set[str] = set()
+        while len(chosen) < rule.max_tasks:
+            for origin in sorted(queues):
+                if queues[origin] and len(chosen) < rule.max_tasks:
+                    chosen.add(queues[origin].pop(0).id)
+        for task in tasks:
+            if task.id not in chosen:
+                self.reject(level, task.layout, task.instruction, task.origin,
+                            f"over the split's max of {rule.max_tasks} tasks")
+        self.tasks = [t for t in self.tasks if t.level != level or t.id in chosen]
+
+    def level2(self) -> None:
+        rule = self.scene.splits.get("L2")
+        for task in self.scene.tasks if rule else ():
+            self.reworded("L2", task.layout, task.forms[0], task.label, rule.wordings)
+
+    def level3(self) -> None:
+        rule = self.scene.splits.get("L3")
+        for task in [t for t in self.tasks if t.level == "L1"] if rule else []:
+            if task.layout in rule.layouts:
+                self.reworded("L3", task.layout, task.form, task.origin, rule.wordings)
+
+
 def generate(spec: Spec, training: dict[str, Behaviour],
-             levels: tuple[Literal["L0", "L1"], ...] = ("L0", "L1")) -> Splits:
+             levels: tuple[Level, ...] = ("L0", "L1", "L2", "L3")) -> Splits:
     """Test tasks for the given levels of every scene, with every rejected candidate."""
     tasks: list[TestTask] = []
     rejected: list[Rejection] = []
+    training_forms = {lf.to_json(f) for t in spec.tasks for f in t.forms}
+    vocabulary = {c for t in spec.tasks for p in t.paraphrases for c in concepts(p)}
     for scene in spec.scenes.values():
-        generator = _Generator(scene, training)
+        generator = _Generator(scene, training, training_forms, vocabulary)
         for level in levels:
             getattr(generator, f"level{level[1]}")()
+            generator.cap(level)
         tasks += generator.tasks
         rejected += generator.rejected
     return Splits(tasks=tuple(tasks), rejected=tuple(rejected))

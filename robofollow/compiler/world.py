@@ -17,6 +17,7 @@ ON_XY_TOLERANCE = 0.02  # m: centre offset that still counts as "on top of"
 CONTACT_TOLERANCE = 0.005  # m: gap that still counts as resting on / touching
 EXTREME_MARGIN = 0.02  # m: the leftmost (...) object leads the runner-up by at least this
 SIZE_MARGIN = 0.10  # a larger object's volume exceeds the runner-up's by this fraction
+COLUMN_TOLERANCE = 0.03  # m: bodies this close in x stand in one column (a detour's choice)
 
 # direction of each horizontal relation in the world frame (+x right, +y away from the robot)
 DIRECTIONS = {"left_of": (-1.0, 0.0), "right_of": (1.0, 0.0), "behind": (0.0, 1.0),
