@@ -70,6 +70,9 @@ class Grounder:
 
     def __init__(self, world: World):
         self.world = world
+        # keyed by object identity (cheap, unlike hashing nested models); the entry keeps its
+        # description alive so that an id is never reused while cached
+        self._referents: dict[int, tuple[lf.Ref, tuple[str, ...]]] = {}
 
     # ---------------------------------------------------------------- referents
     def domain(self, noun: str) -> list[str]:
@@ -78,7 +81,13 @@ class Grounder:
         return [b for b in self.world.bodies if kind_matches(self.world, b, noun)]
 
     def referents(self, ref: lf.Ref) -> list[str]:
-        """Every body the description fits."""
+        """Every body the description fits (memoised: a world does not change)."""
+        cached = self._referents.get(id(ref))
+        if cached is None or cached[0] is not ref:
+            cached = self._referents[id(ref)] = (ref, tuple(self._find(ref)))
+        return list(cached[1])
+
+    def _find(self, ref: lf.Ref) -> list[str]:
         candidates = self.domain(ref.noun)
         comparatives = []
         for constraint in ref.constraints:

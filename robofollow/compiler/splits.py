@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import hashlib
 from robofollow.compiler import lf
-from robofollow.compiler.grounding import Behaviour, GroundingError, Step, ground
+from robofollow.compiler.grounding import Behaviour, Grounder, GroundingError, Step
 from robofollow.compiler.realize import STYLES, realize
 from robofollow.compiler.spec import Level, Model, Scene, Spec
 from robofollow.compiler.training import describe
 from robofollow.compiler.wordings import GENERATORS, concepts
-from robofollow.compiler.world import COLUMN_TOLERANCE, World
+from robofollow.compiler.world import COLUMN_TOLERANCE, World, jitter_worlds
 
 ROUTE_CORRIDOR = 0.03  # m: a waypoint may lie this far outside the source-destination x span
 
@@ -117,6 +117,7 @@ class _Generator:
         self.tasks: list[TestTask] = []
         self.rejected: list[Rejection] = []
         self.seen: dict[tuple[str, str], str] = {}
+        self.grounders: dict[str, list[Grounder]] = {}  # per layout: nominal, then jittered
 
     def reject(self, level: Level, layout: str, instruction: str, origin: str,
                reason: str) -> None:
@@ -138,9 +139,10 @@ class _Generator:
         if key in self.seen:
             self.reject(level, layout, instruction, origin, f"duplicate of {self.seen[key]}")
             return
-        world = World(self.scene, layout)
+        nominal = self.grounders_of(layout)[0]
+        world = nominal.world
         try:
-            behaviour = self.fill_arms(ground(form, world), origin)
+            behaviour = self.fill_arms(nominal.behaviour(form), origin)
         except GroundingError as error:
             self.reject(level, layout, instruction, origin, f"{error.code}: {error.message}")
             return
@@ -153,12 +155,33 @@ class _Generator:
             self.reject(level, layout, instruction, origin,
                         f"waypoint {', '.join(stray)} is no longer on the way")
             return
+        unstable = self.unstable(form, layout, behaviour)
+        if unstable:
+            self.reject(level, layout, instruction, origin, unstable)
+            return
         if task_id is None:
             task_id = f"{self.scene.id}/{level}/{origin}" + ("" if level == "L0" else f"@{layout}")
         self.seen[key] = task_id
         self.tasks.append(TestTask(id=task_id, scene=self.scene.id, level=level, layout=layout,
                                    instruction=instruction, form=form, behaviour=behaviour,
                                    origin=origin, wording=wording))
+
+    def grounders_of(self, layout: str) -> list[Grounder]:
+        if layout not in self.grounders:
+            self.grounders[layout] = [Grounder(w) for w in jitter_worlds(self.scene, layout)]
+        return self.grounders[layout]
+
+    def unstable(self, form: lf.Instruction, layout: str, behaviour: Behaviour) -> str | None:
+        """Why the form would mean something else with the jitter at an extreme, if it would."""
+        objects = [(s.source, s.target) for s in behaviour.steps]
+        for index, grounder in enumerate(self.grounders_of(layout)[1:], start=1):
+            try:
+                found = grounder.behaviour(form)
+            except GroundingError as error:
+                return f"jitter case {index}: {error.code}: {error.message}"
+            if [(s.source, s.target) for s in found.steps] != objects:
+                return f"jitter case {index} changes the objects it refers to"
+        return None
 
     def level0(self) -> None:
         for task in self.scene.tasks:

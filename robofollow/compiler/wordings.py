@@ -68,13 +68,9 @@ class Describer:
             landmark = self.simple(other) if other != body else None
             if landmark is not None:
                 options += [(lf.Related(relation=r, landmark=landmark),) for r in _RELATIONS]
-        found = []
-        for noun in nouns:
-            for constraints in options:
-                ref = lf.Ref(noun=noun, constraints=constraints)
-                if ref not in found and self.unique(ref, body):
-                    found.append(ref)
-        return found
+        refs = (lf.Ref(noun=noun, constraints=constraints)
+                for noun in nouns for constraints in options)  # distinct by construction
+        return [ref for ref in refs if self.unique(ref, body)]
 
 
 def _commands(form: lf.Instruction) -> list[tuple[str, lf.Pick | lf.Place | lf.Push]]:

@@ -6,6 +6,7 @@ Pure Python: the simulator and the oracle share these definitions without import
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -105,3 +106,20 @@ def in_cone(dx: float, dy: float, direction: tuple[float, float]) -> bool:
         return False
     cosine = (dx * direction[0] + dy * direction[1]) / length
     return cosine >= math.cos(math.radians(RELATION_CONE_DEG)) - 1e-12
+
+
+def jitter_worlds(scene: Scene, layout: str) -> list[World]:
+    """The layout at nominal positions, with every body at the same corner of its jitter
+    range (four cases), and with each body alone at each corner."""
+    bodies = [b for b, p in scene.layouts[layout].placed.items() if p.support is None]
+    corners = list(itertools.product((0, 1), (0, 1)))
+
+    def corner(body: str, index: tuple[int, int]) -> tuple[float, float]:
+        jitter = scene.jitter_of(body)
+        return jitter.x[index[0]], jitter.y[index[1]]
+
+    worlds = [World(scene, layout)]
+    worlds += [World(scene, layout, {b: corner(b, c) for b in bodies}) for c in corners]
+    worlds += [World(scene, layout, {b: corner(b, c)}) for b in bodies for c in corners
+               if corner(b, c) != (0.0, 0.0)]
+    return worlds
