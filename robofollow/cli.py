@@ -7,6 +7,7 @@ import io
 import json
 import sys
 from importlib.metadata import version
+from pathlib import Path
 
 from robofollow.compiler import lf
 from robofollow.compiler.notation import notation
@@ -68,6 +69,27 @@ def cmd_parse(args) -> int:
     return _parse_one(args.text, args)
 
 
+def cmd_compile(args) -> int:
+    from robofollow.build import clean, compile_specs, summary, write
+
+    compiled = compile_specs(Path(args.specs))
+    write(compiled, Path(args.out))
+    print(summary(compiled), end="")
+    print(f"written to {args.out}")
+    return 0 if clean(compiled) else 1
+
+
+def cmd_audit(args) -> int:
+    from robofollow.build import clean, compile_specs, summary
+
+    compiled = compile_specs(Path(args.specs))
+    if args.json:
+        print(json.dumps(compiled.report, indent=1, sort_keys=True))
+    else:
+        print(summary(compiled), end="")
+    return 0 if clean(compiled) else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="robofollow",
@@ -88,6 +110,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--style", choices=sorted(STYLES), default="plain",
                    help="paraphrase style of the English line (default: plain)")
     p.set_defaults(handler=cmd_parse)
+
+    p = commands.add_parser(
+        "compile", help="compile the specs into validated L0-L3 splits",
+        description="Load the .rf specs, check every training task, generate the L0-L3 "
+                    "splits from the split rules, audit them, and write the episodes, goal "
+                    "DAGs, rejected candidates, audit.json and summary.txt. Exit status 1 on "
+                    "a bad spec or any audit finding.")
+    p.add_argument("specs", nargs="?", default="specs",
+                   help="a spec file or a folder of .rf files (default: specs)")
+    p.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    p.set_defaults(handler=cmd_compile)
+
+    p = commands.add_parser(
+        "audit", help="audit the splits: entropy, leakage, repertoire, ambiguity",
+        description="Compile the specs in memory and report the audit. Exit status 1 on a "
+                    "bad spec or any finding.")
+    p.add_argument("specs", nargs="?", default="specs",
+                   help="a spec file or a folder of .rf files (default: specs)")
+    p.add_argument("--json", action="store_true", help="print the audit as one JSON object")
+    p.set_defaults(handler=cmd_audit)
     return parser
 
 
