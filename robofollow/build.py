@@ -46,12 +46,12 @@ def _line(record: dict) -> str:
 def episodes(compiled: Compiled, task: TestTask) -> list[dict]:
     rule = compiled.spec.scenes[task.scene].splits.get(task.level)
     rounds, base = (rule.rounds, rule.seed) if rule else (10, 42)
+    form, behaviour = json.loads(lf.to_json(task.form)), task.behaviour.model_dump(mode="json")
     records = []
     for round_index in range(1, rounds + 1):
         record = {"episode": f"{task.id}#r{round_index}", "task": task.id, "scene": task.scene,
                   "level": task.level, "layout": task.layout, "instruction": task.instruction,
-                  "lf": json.loads(lf.to_json(task.form)),
-                  "behaviour": task.behaviour.model_dump(mode="json"),
+                  "lf": form, "behaviour": behaviour,
                   "round": round_index, "seed": episode_seed(task.id, round_index, base)}
         content = compiled.spec.digest + _line(record)
         record["hash"] = hashlib.sha256(content.encode()).hexdigest()[:16]

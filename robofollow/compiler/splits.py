@@ -20,7 +20,7 @@ from robofollow.compiler.grounding import Behaviour, Grounder, GroundingError, S
 from robofollow.compiler.realize import STYLES, realize
 from robofollow.compiler.spec import Level, Model, Scene, Spec
 from robofollow.compiler.training import describe
-from robofollow.compiler.wordings import GENERATORS, concepts
+from robofollow.compiler.wordings import GENERATORS, Describer, concepts
 from robofollow.compiler.world import COLUMN_TOLERANCE, World, jitter_worlds
 
 ROUTE_CORRIDOR = 0.03  # m: a waypoint may lie this far outside the source-destination x span
@@ -91,17 +91,17 @@ def off_route(step: Step, world: World) -> list[str]:
     return [body for _, body in step.waypoints if not low <= world.poses[body].x <= high]
 
 
-def _variants(form: lf.Instruction, world: World, wordings: tuple[str, ...]):
+def _variants(form: lf.Instruction, describer: Describer, wordings: tuple[str, ...]):
     """(wording, form) from each generator alone, then from each ordered pair of the
     generators that reword one aspect ('referents' alone already varies every object)."""
     for wording in wordings:
-        for novel in GENERATORS[wording](form, world):
+        for novel in GENERATORS[wording](form, describer):
             yield wording, novel
     composable = [w for w in wordings if w != "referents"]
     for index, first in enumerate(composable):
         for second in composable[index + 1:]:
-            for middle in GENERATORS[first](form, world):
-                for novel in GENERATORS[second](middle, world):
+            for middle in GENERATORS[first](form, describer):
+                for novel in GENERATORS[second](middle, describer):
                     yield f"{first}+{second}", novel
 
 
@@ -118,6 +118,8 @@ class _Generator:
         self.rejected: list[Rejection] = []
         self.seen: dict[tuple[str, str], str] = {}
         self.grounders: dict[str, list[Grounder]] = {}  # per layout: nominal, then jittered
+        self.describers: dict[str, Describer] = {}
+        self.kept: dict[tuple[str, str], int] = {}  # (level, origin) -> tasks kept so far
 
     def reject(self, level: Level, layout: str, instruction: str, origin: str,
                reason: str) -> None:
@@ -162,6 +164,7 @@ class _Generator:
         if task_id is None:
             task_id = f"{self.scene.id}/{level}/{origin}" + ("" if level == "L0" else f"@{layout}")
         self.seen[key] = task_id
+        self.kept[level, origin] = self.kept.get((level, origin), 0) + 1
         self.tasks.append(TestTask(id=task_id, scene=self.scene.id, level=level, layout=layout,
                                    instruction=instruction, form=form, behaviour=behaviour,
                                    origin=origin, wording=wording))
@@ -199,11 +202,11 @@ class _Generator:
     def reworded(self, level: Level, layout: str, form: lf.Instruction, origin: str,
                  wordings: tuple[str, ...]) -> None:
         """Candidates from each generator, and from each pair of generators in rule order."""
-        world = World(self.scene, layout)
+        if layout not in self.describers:
+            self.describers[layout] = Describer(self.grounders_of(layout)[0])
         rule = self.scene.splits[level]
-        for wording, novel in _variants(form, world, wordings):
-            if rule.max_tasks is not None and sum(
-                    t.origin == origin and t.level == level for t in self.tasks) >= rule.max_tasks:
+        for wording, novel in _variants(form, self.describers[layout], wordings):
+            if rule.max_tasks is not None and self.kept.get((level, origin), 0) >= rule.max_tasks:
                 return  # this origin alone fills the level; the cap would drop the rest
             data = lf.to_json(novel)
             digest = hashlib.sha256(data.encode()).hexdigest()

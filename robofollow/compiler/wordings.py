@@ -1,6 +1,7 @@
 """Novel wordings for L2 and L3: new logical forms built from training concepts.
 
-Each generator takes a task's logical form and the world it is said in, and yields other
+Each generator takes a task's logical form and a Describer of the world it is said in, and
+yields other
 forms: other referring expressions for the same objects ("referents"), equivalent route and
 orientation wording ("routes", "orientation"), other or negated observable conditions
 ("conditions") and swapped branches ("branches"). The split generator keeps a form only when
@@ -14,7 +15,7 @@ from collections.abc import Iterator
 from robofollow.compiler import lf
 from robofollow.compiler.grounding import Grounder, GroundingError
 from robofollow.compiler.lexicon import tokenize
-from robofollow.compiler.world import COLUMN_TOLERANCE, World
+from robofollow.compiler.world import COLUMN_TOLERANCE
 
 _PUNCTUATION = frozenset({"COMMA", "SEMICOLON", "PERIOD"})
 _RELATIONS = ("left_of", "right_of", "behind", "in_front_of", "on", "in")
@@ -29,12 +30,13 @@ def concepts(text: str) -> set[tuple[str, str]]:
 
 
 class Describer:
-    """Descriptions of bodies that pick them out uniquely in one world."""
+    """Descriptions of bodies that pick them out uniquely in one world (memoised)."""
 
-    def __init__(self, world: World):
-        self.world = world
-        self.grounder = Grounder(world)
+    def __init__(self, grounder: Grounder):
+        self.world = grounder.world
+        self.grounder = grounder
         self._simple: dict[str, lf.Ref | None] = {}
+        self._descriptions: dict[str, list[lf.Ref]] = {}
 
     def unique(self, ref: lf.Ref, body: str) -> bool:
         try:
@@ -53,6 +55,11 @@ class Describer:
 
     def descriptions(self, body: str) -> list[lf.Ref]:
         """Every description of one or two constraints that picks out `body`."""
+        if body not in self._descriptions:
+            self._descriptions[body] = self._describe(body)
+        return self._descriptions[body]
+
+    def _describe(self, body: str) -> list[lf.Ref]:
         spec = self.world.bodies[body]
         nouns = [spec.kind] + ([] if spec.fixture else ["object"])
         if spec.kind in ("cube", "slab"):
@@ -97,9 +104,8 @@ def _replace(form: lf.Instruction, path: str, command) -> lf.Instruction:
     return form.model_copy(update={"steps": tuple(steps)})
 
 
-def referents(form: lf.Instruction, world: World) -> Iterator[lf.Instruction]:
+def referents(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruction]:
     """The same commands, with one object, destination or push target described otherwise."""
-    describer = Describer(world)
     grounder = describer.grounder
     for path, command in _commands(form):
         slots = ["object"] + (["destination"] if isinstance(command, lf.Place) else []) + (
@@ -122,9 +128,9 @@ def referents(form: lf.Instruction, world: World) -> Iterator[lf.Instruction]:
                 yield _replace(form, path, command.model_copy(update=update))
 
 
-def routes(form: lf.Instruction, world: World) -> Iterator[lf.Instruction]:
+def routes(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruction]:
     """'pass over W' said as 'avoid passing over X' (X beside W in its column), and back."""
-    describer = Describer(world)
+    world = describer.world
     for path, command in _commands(form):
         if not isinstance(command, lf.Place) or len(command.route) != 1:
             continue
@@ -144,9 +150,9 @@ def routes(form: lf.Instruction, world: World) -> Iterator[lf.Instruction]:
         yield _replace(form, path, command.model_copy(update={"route": (swapped,)}))
 
 
-def orientation(form: lf.Instruction, world: World) -> Iterator[lf.Instruction]:
+def orientation(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruction]:
     """The same final yaw said with the other side facing another way."""
-    grounder = Grounder(world)
+    grounder = describer.grounder
     for path, command in _commands(form):
         if not isinstance(command, lf.Place) or command.orientation is None:
             continue
@@ -162,11 +168,11 @@ def orientation(form: lf.Instruction, world: World) -> Iterator[lf.Instruction]:
                     yield _replace(form, path, command.model_copy(update={"orientation": other}))
 
 
-def conditions(form: lf.Instruction, world: World) -> Iterator[lf.Instruction]:
+def conditions(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruction]:
     """Other observable conditions (and their negations) over the same branches."""
     if not isinstance(form, lf.Conditional):
         return
-    describer = Describer(world)
+    world = describer.world
     found: list[lf.Condition] = []
     for body in world.bodies:
         landmark = describer.simple(body)
@@ -194,7 +200,7 @@ def conditions(form: lf.Instruction, world: World) -> Iterator[lf.Instruction]:
                 yield form.model_copy(update={"condition": variant})
 
 
-def branches(form: lf.Instruction, world: World) -> Iterator[lf.Instruction]:
+def branches(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruction]:
     """The branches swapped, with the condition as it was and negated."""
     if not isinstance(form, lf.Conditional) or form.otherwise is None:
         return

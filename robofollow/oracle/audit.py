@@ -14,7 +14,7 @@ from __future__ import annotations
 import re
 
 from robofollow.compiler import lf
-from robofollow.compiler.grounding import Behaviour, GroundingError, ground
+from robofollow.compiler.grounding import Behaviour, Grounder, GroundingError
 from robofollow.compiler.lexicon import VOCABULARY
 from robofollow.compiler.spec import Spec
 from robofollow.compiler.splits import Splits, signature
@@ -74,14 +74,14 @@ def ambiguities(spec: Spec, training: dict[str, Behaviour], splits: Splits) -> l
     items = [(t.scene, t.layout, f"{t.label}#{i + 1}", form, training[t.label])
              for t in spec.tasks for i, form in enumerate(t.forms)]
     items += [(t.scene, t.layout, t.id, t.form, t.behaviour) for t in splits.tasks]
-    worlds: dict[tuple[str, str], list[World]] = {}
+    grounders: dict[tuple[str, str], list[Grounder]] = {}
     for scene_id, layout, name, form, expected in items:
         key = (scene_id, layout)
-        if key not in worlds:
-            worlds[key] = jitter_worlds(spec.scenes[scene_id], layout)
-        for index, world in enumerate(worlds[key]):
+        if key not in grounders:
+            grounders[key] = [Grounder(w) for w in jitter_worlds(spec.scenes[scene_id], layout)]
+        for index, grounder in enumerate(grounders[key]):
             try:
-                found = ground(form, world)
+                found = grounder.behaviour(form)
             except GroundingError as error:
                 findings.append({"task": name, "finding": f"jitter case {index}: "
                                                           f"{error.message}"})
