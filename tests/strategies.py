@@ -50,3 +50,48 @@ instructions = st.one_of(bodies, conditionals)
 _words = sorted(VOCABULARY) + [",", ";", ".", "-", "isn't", "non-empty"]
 word_salad = st.lists(st.sampled_from(_words), max_size=25).map(" ".join)
 any_text = st.text(max_size=80)
+
+# small random specs: a few objects on a slot grid, swap variants, pick and place tasks
+_SLOTS = [(x, y) for y in (-0.06, -0.18) for x in (-0.14, -0.02, 0.10)]
+_SIZES = {"cube": "half=0.02", "cylinder": "radius=0.02 half_height=0.025",
+          "sphere": "radius=0.02"}
+_PLACEMENTS = {"behind": "behind", "in_front_of": "in front of", "left_of": "to the left of",
+               "right_of": "to the right of"}
+
+
+@st.composite
+def small_specs(draw) -> tuple[str, list[int]]:
+    """(spec text, tasks per training layout) for one small random scene."""
+    count = draw(st.integers(2, 5))
+    objects = draw(st.lists(st.tuples(st.sampled_from(sorted(_SIZES)),
+                                      st.sampled_from(["red", "green", "blue", "yellow"])),
+                            min_size=count, max_size=count, unique=True))
+    slots = draw(st.permutations(range(len(_SLOTS))))[:count]
+    lines = ['scene demo "Random" {', "    jitter * x=[-0.01, 0.01] y=[-0.01, 0.01]"]
+    for index, (kind, colour) in enumerate(objects):
+        lines.append(f"    object o{index} {kind} {_SIZES[kind]} color={colour} "
+                     f"rgb=(0.5, 0.5, 0.5) mass=0.2 friction=0.5")
+    lines.append("    layout base {")
+    lines += [f"        o{i} at ({_SLOTS[s][0]}, {_SLOTS[s][1]})" for i, s in enumerate(slots)]
+    lines.append("    }")
+    variants = draw(st.lists(st.tuples(st.integers(0, count - 1), st.integers(0, count - 1))
+                             .filter(lambda p: p[0] != p[1]), min_size=1, max_size=2))
+    for index, (a, b) in enumerate(variants):
+        lines.append(f"    layout v{index} from base {{ swap o{a} o{b} }}")
+    tasks = draw(st.lists(st.tuples(st.sampled_from(["left", "right"]),
+                                    st.integers(0, count - 1),
+                                    st.one_of(st.none(), st.tuples(st.integers(0, count - 1),
+                                                                   st.sampled_from(sorted(_PLACEMENTS))))),
+                          min_size=1, max_size=5))
+    name = lambda i: f"the {objects[i][1]} {objects[i][0]}"  # noqa: E731
+    for index, (arm, source, place) in enumerate(tasks):
+        text = f"Use your {arm} arm to pick up {name(source)}"
+        if place is not None and place[0] != source:
+            text += f" and place it {_PLACEMENTS[place[1]]} {name(place[0])}"
+        lines += [f"    task t{index} on base {{", f'        "{text}."', "    }"]
+    layouts = ", ".join(f"v{i}" for i in range(len(variants)))
+    lines += [f"    split L1 layouts=({layouts}) rounds=2 seed=7",
+              "    split L2 wordings=(referents) max=12 rounds=2 seed=7",
+              f"    split L3 layouts=({layouts}) wordings=(referents) max=12 rounds=2 seed=7",
+              "}"]
+    return "\n".join(lines) + "\n", [len(tasks)]
