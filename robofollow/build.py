@@ -2,7 +2,7 @@
 
 Outputs (deterministic: same specs, same bytes):
     episodes/<scene>_<level>.jsonl   one episode per line (task x round, with its seed)
-    tasks/<scene>_<level>.jsonl      one test task per line, with its goal DAG
+    tasks/<scene>_<level>.jsonl      one test task per line, with its goal DAG and expert plan
     rejected.jsonl                   every rejected candidate, with the reason
     audit.json                       entropy, groups, counts, leakage, repertoire, ambiguity
     summary.txt                      the same, for people
@@ -17,10 +17,12 @@ from pathlib import Path
 
 from robofollow.compiler import lf
 from robofollow.compiler.goals import goal_graph, graph_to_dict
+from robofollow.compiler.plans import plan
 from robofollow.compiler.spec import LEVELS, Spec
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.splits import Splits, TestTask, episode_seed, generate
 from robofollow.compiler.training import check_training
+from robofollow.compiler.world import World
 from robofollow.oracle.audit import audit, findings
 
 
@@ -90,10 +92,13 @@ def write(compiled: Compiled, out: Path) -> None:
                     f.writelines(_line(r) for r in episodes(compiled, task))
             with open(out / "tasks" / f"{scene}_{level}.jsonl", "w", encoding="utf-8") as f:
                 for task in tasks:
+                    world = World(compiled.spec.scenes[scene], task.layout)
                     f.write(_line({"task": task.id, "origin": task.origin,
                                    "wording": task.wording, "layout": task.layout,
                                    "instruction": task.instruction,
-                                   "goal": graph_to_dict(goal_graph(task.behaviour))}))
+                                   "goal": graph_to_dict(goal_graph(task.behaviour)),
+                                   "plan": plan(task.behaviour, world).model_dump(
+                                       mode="json")["points"]}))
     with open(out / "rejected.jsonl", "w", encoding="utf-8") as f:
         f.writelines(_line(r.model_dump(mode="json")) for r in compiled.splits.rejected)
     (out / "audit.json").write_text(json.dumps(compiled.report, indent=1, sort_keys=True) + "\n",

@@ -45,6 +45,8 @@ def test_episode_files_hold_rounds_with_seeds_and_hashes(compiled):
     assert first["instruction"] == "Use your left arm to pick up the larger red object."
     tasks = [json.loads(x) for x in (out / "tasks" / "scene2_L0.jsonl").read_text().splitlines()]
     assert [n["weight"] for n in tasks[0]["goal"]["nodes"]] == [0.8, 0.2]
+    assert [p["name"] for p in tasks[0]["plan"]] == ["pre_grasp", "grasp", "close", "lift",
+                                                     "home"]
 
 
 def test_two_compiles_are_byte_identical(compiled, tmp_path):

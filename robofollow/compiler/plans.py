@@ -1,0 +1,151 @@
+"""Behaviour + world -> expert plan: per-arm waypoints in the world frame, gripper events.
+
+Positions are where the gripper's grasp centre (between the fingertips) should be, in metres;
+the simulator maps them to its own tool frame. A `home` point has no position: it is the
+arm's rest pose. Every action kind is covered: pickups (held at home, as the demonstrations
+do), relative placements, stacks, bowls, pushes, transfers with a route and a final yaw,
+unstacking, two-arm sequences (each object held until both are up), conditional branches.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Literal
+
+from robofollow.compiler.grounding import Behaviour, Step
+from robofollow.compiler.spec import Model
+from robofollow.compiler.splits import passes_over
+from robofollow.compiler.world import DIRECTIONS, World
+
+PRE_GRASP = 0.08  # m: approach height above the grasp point
+LIFT = 0.10  # m: lift after grasping
+PRE_PLACE = 0.06  # m: approach height above the place point
+RETREAT = 0.08  # m: move up after releasing
+PLACE_GAP = 0.04  # m: free space between a placed object and its landmark
+STACK_CLEARANCE = 0.005  # m: release height above the support's top
+TABLE_CLEARANCE = 0.001  # m: release height above the table
+ROUTE_CLEARANCE = 0.09  # m: carried object's bottom above the highest body on the route
+PUSH_CONTACT = 0.015  # m: gap between fingertips and the pushed object's side
+PUSH_RUN_UP = 0.02  # m: start this much further back
+PUSH_DISTANCE = 0.05  # m: how far to push
+PUSH_BACK_OFF = 0.03  # m: back off after pushing
+PUSH_HEIGHT = 0.02  # m: fingertip height above the table while pushing
+OPEN, CLOSED = 1.0, 0.0
+
+
+class PlanPoint(Model):
+    name: str
+    arm: Literal["left", "right"]
+    position: tuple[float, float, float] | None  # None for `home`
+    yaw_degrees: float = 0.0  # gripper rotation about z from its top-down grasp
+    gripper: float  # target opening at this point: 1 open, 0 closed
+
+
+class Plan(Model):
+    points: tuple[PlanPoint, ...]
+
+    def of(self, arm: str) -> list[PlanPoint]:
+        return [p for p in self.points if p.arm == arm]
+
+
+def _up(position: tuple[float, float, float], dz: float) -> tuple[float, float, float]:
+    return (position[0], position[1], position[2] + dz)
+
+
+class _Planner:
+    def __init__(self, world: World):
+        self.world = world
+        self.points: list[PlanPoint] = []
+
+    def add(self, name: str, arm: str, position, gripper: float, yaw: float = 0.0) -> None:
+        if position is not None:
+            position = tuple(round(v, 6) for v in position)
+        self.points.append(PlanPoint(name=name, arm=arm, position=position, gripper=gripper,
+                                     yaw_degrees=yaw))
+
+    def grasp_point(self, body: str) -> tuple[float, float, float]:
+        pose = self.world.poses[body]
+        return (pose.x, pose.y, pose.z)
+
+    def pick(self, step: Step) -> tuple[float, float, float]:
+        grasp = self.grasp_point(step.source)
+        self.add("pre_grasp", step.arm, _up(grasp, PRE_GRASP), OPEN)
+        self.add("grasp", step.arm, grasp, OPEN)
+        self.add("close", step.arm, grasp, CLOSED)
+        lifted = _up(grasp, LIFT)
+        self.add("lift", step.arm, lifted, CLOSED)
+        return lifted
+
+    def place_point(self, step: Step) -> tuple[float, float, float]:
+        world, half = self.world, self.world.bodies[step.source].half_extents
+        target = world.poses[step.target]
+        if step.relation == "on":
+            return (target.x, target.y, world.top(step.target) + half[2] + STACK_CLEARANCE)
+        if step.relation == "in":
+            return (target.x, target.y, world.bottom(step.target) + 0.005 + half[2] + 0.01)
+        direction = DIRECTIONS.get(step.relation, (1.0, 0.0))  # next_to: to the right
+        landmark = world.bodies[step.target].half_extents
+        reach = (abs(direction[0]) * (landmark[0] + half[0]) +
+                 abs(direction[1]) * (landmark[1] + half[1]) + PLACE_GAP)
+        return (target.x + direction[0] * reach, target.y + direction[1] * reach,
+                world.table + half[2] + TABLE_CLEARANCE)
+
+    def route(self, step: Step, start: tuple[float, float, float]) -> None:
+        over = passes_over(step, self.world)
+        if not over:
+            return
+        carried = self.world.bodies[step.source].half_extents[2]
+        height = max(self.world.top(b) for b in over) + ROUTE_CLEARANCE + carried
+        for body in sorted(over, key=lambda b: math.dist(start[:2], (self.world.poses[b].x,
+                                                                    self.world.poses[b].y))):
+            pose = self.world.poses[body]
+            self.add("via", step.arm, (pose.x, pose.y, max(height, start[2])), CLOSED)
+
+    def place(self, step: Step) -> None:
+        lifted = self.pick(step)
+        self.route(step, lifted)
+        point = self.place_point(step)
+        yaw = step.yaw_degrees or 0.0
+        self.add("pre_place", step.arm, _up(point, PRE_PLACE), CLOSED, yaw)
+        self.add("place", step.arm, point, CLOSED, yaw)
+        self.add("release", step.arm, point, OPEN, yaw)
+        self.add("retreat", step.arm, _up(point, RETREAT), OPEN, yaw)
+        self.add("home", step.arm, None, OPEN)
+
+    def push(self, step: Step) -> None:
+        world = self.world
+        source, target = world.poses[step.source], world.poses[step.target]
+        dx, dy = target.x - source.x, target.y - source.y
+        length = math.hypot(dx, dy) or 1.0
+        ux, uy = dx / length, dy / length
+        half = world.bodies[step.source].half_extents
+        radius = half[0] * (math.sqrt(2) if world.bodies[step.source].kind == "cube" else 1.0)
+        back = radius + PUSH_CONTACT + PUSH_RUN_UP
+        z = world.table + PUSH_HEIGHT
+        start = (source.x - ux * back, source.y - uy * back, z)
+        end = (start[0] + ux * PUSH_DISTANCE, start[1] + uy * PUSH_DISTANCE, z)
+        self.add("pre_push", step.arm, _up(start, LIFT), OPEN)
+        self.add("close", step.arm, _up(start, LIFT), CLOSED)
+        self.add("push_start", step.arm, start, CLOSED)
+        self.add("push_end", step.arm, end, CLOSED)
+        backed = (end[0] - ux * PUSH_BACK_OFF, end[1] - uy * PUSH_BACK_OFF, z)
+        self.add("back_off", step.arm, backed, CLOSED)
+        self.add("lift", step.arm, _up(backed, LIFT), CLOSED)
+        self.add("home", step.arm, None, CLOSED)
+
+
+def plan(behaviour: Behaviour, world: World) -> Plan:
+    """The expert's plan for a behaviour in a world (its selected branch, for a conditional)."""
+    planner = _Planner(world)
+    held = []
+    for step in behaviour.steps:
+        if step.action == "pick":
+            planner.pick(step)
+            held.append(step.arm)  # held until every step is done, then carried home
+        elif step.action == "push":
+            planner.push(step)
+        else:
+            planner.place(step)
+    for arm in held:
+        planner.add("home", arm, None, CLOSED)
+    return Plan(points=tuple(planner.points))
