@@ -7,8 +7,8 @@ from pathlib import Path
 import networkx as nx
 import pytest
 
+from robofollow.compiler.behaviour import Behaviour, Step
 from robofollow.compiler.goals import goal_graph, graph_to_dict, stage_order
-from robofollow.compiler.grounding import Behaviour, Step
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.training import check_training
 

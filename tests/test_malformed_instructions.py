@@ -3,8 +3,13 @@
 import pytest
 
 from robofollow.compiler.parser import parse
-from robofollow.errors import (InstructionError, RoboFollowError, UngrammaticalError,
-                               UnknownWordError, UnsupportedConstructError)
+from robofollow.errors import (
+    InstructionError,
+    RoboFollowError,
+    UngrammaticalError,
+    UnknownWordError,
+    UnsupportedConstructError,
+)
 
 UNKNOWN, UNGRAMMATICAL, UNSUPPORTED = UnknownWordError, UngrammaticalError, UnsupportedConstructError
 

@@ -13,7 +13,7 @@ from itertools import pairwise
 
 import networkx as nx
 
-from robofollow.compiler.grounding import Behaviour, Step
+from robofollow.compiler.behaviour import Behaviour, Step
 from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
 
 

@@ -8,35 +8,12 @@ GroundingError that lists the candidates.
 
 from __future__ import annotations
 
-from typing import Literal
-
 from robofollow.compiler import lf, notation
-from robofollow.compiler.spec import Model
+from robofollow.compiler.behaviour import Behaviour, Step
 from robofollow.compiler.world import EXTREME_AXES, EXTREME_MARGIN, SIZE_MARGIN, World
 from robofollow.errors import RoboFollowError
 
 TABLE = "table"  # the table as a landmark ('not touching the table')
-
-
-class Step(Model):
-    """One grounded command."""
-
-    action: Literal["pick", "place", "push"]
-    arm: lf.Arm | None
-    source: str
-    relation: lf.PlaceRelation | None = None
-    target: str | None = None
-    waypoints: tuple[tuple[Literal["via", "avoid"], str], ...] = ()
-    yaw_degrees: float | None = None
-
-
-class Behaviour(Model):
-    """What an instruction asks for in one layout."""
-
-    steps: tuple[Step, ...]
-    condition: bool | None = None  # a conditional's condition, evaluated in the layout
-    branch: Literal["then", "otherwise"] | None = None
-    other: tuple[Step, ...] | None = None  # the branch not taken, when it grounds
 
 
 class GroundingError(RoboFollowError):

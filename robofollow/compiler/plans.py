@@ -12,8 +12,8 @@ from __future__ import annotations
 import math
 from typing import Literal
 
-from robofollow.compiler.grounding import Behaviour, Step
-from robofollow.compiler.spec import Model
+from robofollow.compiler.behaviour import Behaviour, Step
+from robofollow.compiler.model import Model
 from robofollow.compiler.splits import passes_over
 from robofollow.compiler.world import DIRECTIONS, World
 

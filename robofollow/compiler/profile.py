@@ -6,7 +6,7 @@ goal graph (and so in every result) it was used for.
 
 from __future__ import annotations
 
-from robofollow.compiler.spec import Model
+from robofollow.compiler.model import Model
 
 
 class ScoringProfile(Model):

@@ -27,8 +27,21 @@ from dataclasses import dataclass, field
 
 from robofollow.compiler import lf
 from robofollow.compiler.syntax import (
-    NP, PP, Action, Among, ArmPhrase, Break, ConditionalPhrase, ConditionPhrase, It, Link,
-    OrientationPhrase, Predicate, Region, RoutePhrase, Steps,
+    NP,
+    PP,
+    Action,
+    Among,
+    ArmPhrase,
+    Break,
+    ConditionalPhrase,
+    ConditionPhrase,
+    It,
+    Link,
+    OrientationPhrase,
+    Predicate,
+    Region,
+    RoutePhrase,
+    Steps,
 )
 from robofollow.errors import UnsupportedConstructError
 

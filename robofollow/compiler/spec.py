@@ -8,17 +8,13 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict
-
 from robofollow.compiler import lf
+from robofollow.compiler.behaviour import Step
+from robofollow.compiler.model import Model
 
 BodyKind = Literal["cube", "slab", "cylinder", "sphere", "label", "bowl"]
 Level = Literal["L0", "L1", "L2", "L3"]
 LEVELS: tuple[Level, ...] = ("L0", "L1", "L2", "L3")
-
-
-class Model(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
 
 
 class Source(Model):
@@ -78,21 +74,11 @@ class Layout(Model):
     placed: dict[str, Placed]
 
 
-class ExpectedStep(Model):
-    """One step of a behaviour as a task author writes it after `expect`."""
-
-    action: Literal["pick", "place", "push"]
-    arm: lf.Arm
-    source: str
-    relation: lf.PlaceRelation | None = None
-    target: str | None = None
-    waypoints: tuple[tuple[Literal["via", "avoid"], str], ...] = ()
-    yaw_degrees: float | None = None
-
-
 class Expected(Model):
+    """A behaviour as a task author writes it after `expect`."""
+
     branch: Literal["then", "otherwise"] | None = None
-    steps: tuple[ExpectedStep, ...]
+    steps: tuple[Step, ...]
 
 
 class Task(Model):

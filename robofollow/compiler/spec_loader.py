@@ -14,9 +14,19 @@ from pathlib import Path
 from lark import Lark, Token, Tree, UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
 
 from robofollow.compiler import lf
+from robofollow.compiler.behaviour import Step
 from robofollow.compiler.parser import parse
 from robofollow.compiler.spec import (
-    Body, Expected, ExpectedStep, Jitter, Layout, Placed, Scene, Source, Spec, SplitRule, Task,
+    Body,
+    Expected,
+    Jitter,
+    Layout,
+    Placed,
+    Scene,
+    Source,
+    Spec,
+    SplitRule,
+    Task,
 )
 from robofollow.errors import InstructionError, SpecError, SpecErrors
 from robofollow.resources import grammar_text
@@ -324,11 +334,11 @@ class _Loader:
                 str(names[1]) if child.data == "place" else None)
             steps.append(dict(action=child.data, arm=str(arm), source=str(source),
                               relation=relation, target=target,
-                              waypoints=tuple((str(w.children[0]), str(w.children[1]))
-                                              for w in waypoints), yaw_degrees=yaw))
+                              waypoints=tuple(sorted((str(w.children[0]), str(w.children[1]))
+                                                     for w in waypoints)), yaw_degrees=yaw))
         if len(self.errors) > errors_before:
             return None
-        return Expected(branch=branch, steps=tuple(ExpectedStep(**s) for s in steps))
+        return Expected(branch=branch, steps=tuple(Step(**s) for s in steps))
 
     def split(self, item: Tree, layouts: set[str]) -> SplitRule:
         level, *attribute_nodes = item.children

@@ -15,10 +15,13 @@ waypoint still lies on the way from the source to the destination, as it does in
 from __future__ import annotations
 
 import hashlib
+
 from robofollow.compiler import lf
-from robofollow.compiler.grounding import Behaviour, Grounder, GroundingError, Step
+from robofollow.compiler.behaviour import Behaviour, Step
+from robofollow.compiler.grounding import Grounder, GroundingError
+from robofollow.compiler.model import Model
 from robofollow.compiler.realize import STYLES, realize
-from robofollow.compiler.spec import Level, Model, Scene, Spec
+from robofollow.compiler.spec import Level, Scene, Spec
 from robofollow.compiler.training import describe
 from robofollow.compiler.wordings import GENERATORS, Describer, concepts
 from robofollow.compiler.world import COLUMN_TOLERANCE, World, jitter_worlds

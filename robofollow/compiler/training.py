@@ -10,7 +10,8 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 
-from robofollow.compiler.grounding import Behaviour, GroundingError, Step, ground
+from robofollow.compiler.behaviour import Behaviour, Step
+from robofollow.compiler.grounding import GroundingError, ground
 from robofollow.compiler.spec import Expected, Scene, Source, Spec, Task
 from robofollow.compiler.world import World
 from robofollow.errors import SpecError, SpecErrors
@@ -48,10 +49,7 @@ def describe(behaviour: Behaviour) -> str:
 
 
 def expected_behaviour(expected: Expected) -> Behaviour:
-    steps = tuple(Step(action=s.action, arm=s.arm, source=s.source, relation=s.relation,
-                       target=s.target, waypoints=tuple(sorted(s.waypoints)),
-                       yaw_degrees=s.yaw_degrees) for s in expected.steps)
-    return Behaviour(steps=steps, branch=expected.branch)
+    return Behaviour(steps=expected.steps, branch=expected.branch)
 
 
 def _without_arms(behaviour: Behaviour) -> Behaviour:

@@ -14,12 +14,14 @@ from __future__ import annotations
 import re
 
 from robofollow.compiler import lf
-from robofollow.compiler.grounding import Behaviour, Grounder, GroundingError
+from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.grounding import Grounder, GroundingError
 from robofollow.compiler.lexicon import VOCABULARY
 from robofollow.compiler.spec import Spec
 from robofollow.compiler.splits import Splits, signature
 from robofollow.compiler.world import World, jitter_worlds
 from robofollow.oracle.entropy import entropy_bits, scene_groups
+
 
 def _identifiers(spec: Spec) -> set[str]:
     """Spec names that could leak into an instruction (those that are not plain words)."""

@@ -1,0 +1,30 @@
+"""What an instruction asks for, grounded: steps (arm, action, objects, route, final yaw), and
+for a conditional the condition's value and both branches."""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from robofollow.compiler import lf
+from robofollow.compiler.model import Model
+
+
+class Step(Model):
+    """One grounded command."""
+
+    action: Literal["pick", "place", "push"]
+    arm: lf.Arm | None
+    source: str
+    relation: lf.PlaceRelation | None = None
+    target: str | None = None
+    waypoints: tuple[tuple[Literal["via", "avoid"], str], ...] = ()
+    yaw_degrees: float | None = None
+
+
+class Behaviour(Model):
+    """What an instruction asks for in one layout."""
+
+    steps: tuple[Step, ...]
+    condition: bool | None = None  # a conditional's condition, evaluated in the layout
+    branch: Literal["then", "otherwise"] | None = None
+    other: tuple[Step, ...] | None = None  # the branch not taken, when it grounds
