@@ -24,7 +24,7 @@ from robofollow.compiler.realize import STYLES, realize
 from robofollow.compiler.spec import Level, Scene, Spec
 from robofollow.compiler.training import describe
 from robofollow.compiler.wordings import GENERATORS, Describer, concepts
-from robofollow.compiler.world import COLUMN_TOLERANCE, World, jitter_worlds
+from robofollow.compiler.world import World, jitter_worlds
 
 ROUTE_CORRIDOR = 0.03  # m: a waypoint may lie this far outside the source-destination x span
 
@@ -66,9 +66,7 @@ def passes_over(step: Step, world: World) -> tuple[str, ...]:
         if mode == "via":
             over.add(body)
             continue
-        x = world.poses[body].x
-        over.update(b for b in world.movable if b not in (body, step.source, step.target)
-                    and abs(world.poses[b].x - x) <= COLUMN_TOLERANCE)
+        over.update(world.column_mates(body, excluding=(step.source, step.target)))
     return tuple(sorted(over))
 
 

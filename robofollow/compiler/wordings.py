@@ -15,7 +15,6 @@ from collections.abc import Iterator
 from robofollow.compiler import lf
 from robofollow.compiler.grounding import Grounder, GroundingError
 from robofollow.compiler.lexicon import tokenize
-from robofollow.compiler.world import COLUMN_TOLERANCE
 
 _PUNCTUATION = frozenset({"COMMA", "SEMICOLON", "PERIOD"})
 _RELATIONS = ("left_of", "right_of", "behind", "in_front_of", "on", "in")
@@ -130,7 +129,6 @@ def referents(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruc
 
 def routes(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruction]:
     """'pass over W' said as 'avoid passing over X' (X beside W in its column), and back."""
-    world = describer.world
     for path, command in _commands(form):
         if not isinstance(command, lf.Place) or len(command.route) != 1:
             continue
@@ -140,9 +138,7 @@ def routes(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instructio
             source = describer.grounder.resolve(command.object)
         except GroundingError:
             continue
-        x = world.poses[body].x
-        mates = [b for b in world.movable if b not in (body, source)
-                 and abs(world.poses[b].x - x) <= COLUMN_TOLERANCE]
+        mates = describer.world.column_mates(body, excluding=(source,))
         if len(mates) != 1 or describer.simple(mates[0]) is None:
             continue
         other = "avoid" if waypoint.mode == "via" else "via"

@@ -65,6 +65,12 @@ class World:
     def movable(self) -> list[str]:
         return [b for b, body in self.bodies.items() if not body.fixture]
 
+    def column_mates(self, body: str, excluding: tuple[str, ...] = ()) -> list[str]:
+        """Movable bodies standing in `body`'s column (within COLUMN_TOLERANCE in x)."""
+        x = self.poses[body].x
+        return [b for b in self.movable if b != body and b not in excluding
+                and abs(self.poses[b].x - x) <= COLUMN_TOLERANCE]
+
     def bottom(self, body: str) -> float:
         return self.poses[body].z - self.bodies[body].half_extents[2]
 
