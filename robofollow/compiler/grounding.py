@@ -191,6 +191,21 @@ class Grounder:
         return 0.0 if wants_long_axis_on_y == long_axis_on_y else 90.0
 
 
+def instability(form: lf.Instruction, grounders: list[Grounder], expected: Behaviour,
+                first_case: int = 0) -> str | None:
+    """Why `form` fails to ground, or picks other objects than `expected`, in one of the
+    worlds (numbered from `first_case`); None when it means the same in all of them."""
+    objects = [(s.source, s.target) for s in expected.steps]
+    for index, grounder in enumerate(grounders, start=first_case):
+        try:
+            found = grounder.behaviour(form)
+        except GroundingError as error:
+            return f"jitter case {index}: {error.code}: {error.message}"
+        if [(s.source, s.target) for s in found.steps] != objects:
+            return f"jitter case {index} changes the objects it refers to"
+    return None
+
+
 def ground(instruction: lf.Instruction, world: World) -> Behaviour:
     """The behaviour an instruction asks for in a world."""
     return Grounder(world).behaviour(instruction)

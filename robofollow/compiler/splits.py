@@ -18,7 +18,7 @@ import hashlib
 
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour, Step
-from robofollow.compiler.grounding import Grounder, GroundingError
+from robofollow.compiler.grounding import Grounder, GroundingError, instability
 from robofollow.compiler.model import Model
 from robofollow.compiler.realize import STYLES, realize
 from robofollow.compiler.spec import Level, Scene, Spec
@@ -158,7 +158,7 @@ class _Generator:
             self.reject(level, layout, instruction, origin,
                         f"waypoint {', '.join(stray)} is no longer on the way")
             return
-        unstable = self.unstable(form, layout, behaviour)
+        unstable = instability(form, self.grounders_of(layout)[1:], behaviour, first_case=1)
         if unstable:
             self.reject(level, layout, instruction, origin, unstable)
             return
@@ -174,18 +174,6 @@ class _Generator:
         if layout not in self.grounders:
             self.grounders[layout] = [Grounder(w) for w in jitter_worlds(self.scene, layout)]
         return self.grounders[layout]
-
-    def unstable(self, form: lf.Instruction, layout: str, behaviour: Behaviour) -> str | None:
-        """Why the form would mean something else with the jitter at an extreme, if it would."""
-        objects = [(s.source, s.target) for s in behaviour.steps]
-        for index, grounder in enumerate(self.grounders_of(layout)[1:], start=1):
-            try:
-                found = grounder.behaviour(form)
-            except GroundingError as error:
-                return f"jitter case {index}: {error.code}: {error.message}"
-            if [(s.source, s.target) for s in found.steps] != objects:
-                return f"jitter case {index} changes the objects it refers to"
-        return None
 
     def level0(self) -> None:
         for task in self.scene.tasks:

@@ -15,7 +15,7 @@ import re
 
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.grounding import Grounder, GroundingError
+from robofollow.compiler.grounding import Grounder, instability
 from robofollow.compiler.lexicon import VOCABULARY
 from robofollow.compiler.spec import Spec
 from robofollow.compiler.splits import Splits, signature
@@ -81,18 +81,9 @@ def ambiguities(spec: Spec, training: dict[str, Behaviour], splits: Splits) -> l
         key = (scene_id, layout)
         if key not in grounders:
             grounders[key] = [Grounder(w) for w in jitter_worlds(spec.scenes[scene_id], layout)]
-        for index, grounder in enumerate(grounders[key]):
-            try:
-                found = grounder.behaviour(form)
-            except GroundingError as error:
-                findings.append({"task": name, "finding": f"jitter case {index}: "
-                                                          f"{error.message}"})
-                break
-            if [(s.source, s.target) for s in found.steps] != [
-                    (s.source, s.target) for s in expected.steps]:
-                findings.append({"task": name, "finding": f"jitter case {index} changes "
-                                                          "the objects it refers to"})
-                break
+        problem = instability(form, grounders[key], expected)
+        if problem:
+            findings.append({"task": name, "finding": problem})
     return findings
 
 
