@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import hashlib
 import math
-from functools import cache
+from functools import cache, lru_cache
 from pathlib import Path
 
 from lark import Lark, Token, Tree, UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
@@ -46,6 +46,23 @@ _PHYSICS = ("mass", "friction")
 _SETTINGS = {"table_height": 0.74}
 
 
+@lru_cache(maxsize=64)
+def _file_lines(file: str) -> tuple[str, ...]:
+    try:
+        return tuple(Path(file).read_text(encoding="utf-8").splitlines())
+    except OSError:
+        return ()
+
+
+def spec_error(code: str, message: str, where: Source, length: int = 1,
+               lines: list[str] | tuple[str, ...] | None = None) -> SpecError:
+    """A SpecError showing the source line (from `lines`, else read from the file)."""
+    lines = _file_lines(where.file) if lines is None else lines
+    source_line = lines[where.line - 1] if 0 < where.line <= len(lines) else ""
+    return SpecError(code, message, file=where.file, line=where.line, column=where.column,
+                     source_line=source_line, length=length)
+
+
 @cache
 def _parser() -> Lark:
     return Lark(grammar_text("spec.lark"), parser="lalr", strict=True, propagate_positions=True)
@@ -80,10 +97,8 @@ class _Loader:
         else:
             file, line, column = self.file, where.meta.line, where.meta.column
             size = 1
-        lines = self.lines.get(file, [])
-        source_line = lines[line - 1] if 0 < line <= len(lines) else ""
-        self.errors.append(SpecError(code, message, file=file, line=line, column=column,
-                                     source_line=source_line, length=length or size))
+        self.errors.append(spec_error(code, message, Source(file=file, line=line, column=column),
+                                      length or size, self.lines.get(file, [])))
 
     def source(self, token: Token) -> Source:
         return Source(file=self.file, line=token.line, column=token.column)

@@ -7,12 +7,10 @@ arms is a disagreement.
 
 from __future__ import annotations
 
-from functools import lru_cache
-from pathlib import Path
-
 from robofollow.compiler.behaviour import Behaviour, Step
 from robofollow.compiler.grounding import GroundingError, ground
-from robofollow.compiler.spec import Expected, Scene, Source, Spec, Task
+from robofollow.compiler.spec import Expected, Scene, Spec, Task
+from robofollow.compiler.spec_loader import spec_error
 from robofollow.compiler.world import World
 from robofollow.errors import SpecError, SpecErrors
 
@@ -83,21 +81,6 @@ def task_behaviour(task: Task, scene: Scene) -> Behaviour:
     steps = tuple(s.model_copy(update={"arm": arm})
                   for s, arm in zip(first.steps, arms, strict=True))
     return first.model_copy(update={"steps": steps})
-
-
-@lru_cache(maxsize=64)
-def _file_lines(file: str) -> tuple[str, ...]:
-    try:
-        return tuple(Path(file).read_text(encoding="utf-8").splitlines())
-    except OSError:
-        return ()
-
-
-def spec_error(code: str, message: str, where: Source, length: int = 1) -> SpecError:
-    lines = _file_lines(where.file)
-    source_line = lines[where.line - 1] if 0 < where.line <= len(lines) else ""
-    return SpecError(code, message, file=where.file, line=where.line, column=where.column,
-                     source_line=source_line, length=length)
 
 
 def check_training(spec: Spec) -> dict[str, Behaviour]:
