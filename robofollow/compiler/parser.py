@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from functools import cache
 
-from lark import Lark, UnexpectedInput, UnexpectedToken
+from lark import Lark, UnexpectedToken
 from lark.lexer import Lexer
 
 from robofollow.compiler import lf
@@ -72,6 +72,4 @@ def parse(text: str) -> lf.Instruction:
         syntax = _lark().parse(text)
     except UnexpectedToken as error:
         raise _ungrammatical(error, text) from None
-    except UnexpectedInput as error:  # pragma: no cover - the word lexer reports its own errors
-        raise UngrammaticalError(str(error), text=text, column=error.column) from None
     return Semantics(text).instruction(syntax)
