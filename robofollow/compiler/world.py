@@ -38,13 +38,16 @@ class World:
     """The bodies of one layout, at nominal positions plus optional jitter offsets."""
 
     def __init__(self, scene: Scene, layout: str,
-                 offsets: dict[str, tuple[float, float]] | None = None):
+                 offsets: dict[str, tuple[float, float]] | None = None,
+                 positions: dict[str, tuple[float, float, float]] | None = None):
+        """Bodies at nominal positions plus `offsets`, or exactly at `positions` (e.g. as
+        measured in a simulation) where given."""
         self.scene = scene
         self.layout = scene.layouts[layout]
         self.table = scene.table_height
         self.bodies: dict[str, Body] = {b: scene.bodies[b] for b in self.layout.placed}
         offsets = offsets or {}
-        self.poses: dict[str, Pose] = {}
+        self.poses: dict[str, Pose] = {b: Pose(*map(float, p)) for b, p in (positions or {}).items()}
         for body in self.layout.placed:
             self._pose(body, offsets)
 
@@ -112,6 +115,17 @@ def in_cone(dx: float, dy: float, direction: tuple[float, float]) -> bool:
         return False
     cosine = (dx * direction[0] + dy * direction[1]) / length
     return cosine >= math.cos(math.radians(RELATION_CONE_DEG)) - 1e-12
+
+
+def sample_offsets(scene: Scene, layout: str, rng) -> dict[str, tuple[float, float]]:
+    """Seeded start jitter: a uniform (dx, dy) per body that rests on the table, drawn from
+    its jitter range in layout order (stacked and contained bodies follow their support)."""
+    offsets = {}
+    for body, placed in scene.layouts[layout].placed.items():
+        if placed.support is None:
+            jitter = scene.jitter_of(body)
+            offsets[body] = (float(rng.uniform(*jitter.x)), float(rng.uniform(*jitter.y)))
+    return offsets
 
 
 def jitter_worlds(scene: Scene, layout: str) -> list[World]:

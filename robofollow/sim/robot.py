@@ -1,0 +1,36 @@
+"""The bimanual ALOHA as this project builds it: two ViperX 300 s arms facing the table.
+
+Joint order of the 14-D state and action: [left 6, left gripper, right 6, right gripper];
+the gripper value is normalised, 1 = open (fingers FINGER_TRAVEL apart from the centre),
+0 = closed. Kinematics (link offsets, axes, joint limits) are the ViperX 300 s's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+ARMS = ("left", "right")
+ARM_JOINTS = ("waist", "shoulder", "elbow", "forearm_roll", "wrist_angle", "wrist_rotate")
+STATE_NAMES = tuple(f"{arm}/{name}" for arm in ARMS for name in ARM_JOINTS + ("gripper",))
+
+BASE_XY = {"left": (-0.24, -0.38), "right": (0.24, -0.38)}  # m: arm bases, on the table top
+BASE_YAW = np.pi / 2  # rad: both arms face +y, away from the robot side of the table
+
+# rad: the rest pose both arms start from and return to (gripper high, outside the work area)
+HOME = np.array([0.0, -0.96, 1.16, 0.0, -0.3, 0.0])
+
+JOINT_LOW = np.array([-3.14158, -1.85005, -1.76278, -3.14158, -1.8675, -3.14158])
+JOINT_HIGH = np.array([3.14158, 1.25664, 1.6057, 3.14158, 2.23402, 3.14158])
+
+FINGER_TRAVEL = 0.0375  # m: each finger's stroke; an open gripper is 7.5 cm wide inside
+TCP_OFFSET = 0.13  # m: grasp centre (between the finger pads) along the gripper axis
+FINGER = {"x": 0.112, "hx": 0.03, "hy": 0.003, "hz": 0.012}  # m: finger box, gripper frame
+
+ACTION_LOW = np.concatenate([JOINT_LOW, [0.0], JOINT_LOW, [0.0]])
+ACTION_HIGH = np.concatenate([JOINT_HIGH, [1.0], JOINT_HIGH, [1.0]])
+
+
+def home_state(gripper: float = 1.0) -> np.ndarray:
+    """The 14-D joint target of both arms at rest."""
+    arm = np.concatenate([HOME, [gripper]])
+    return np.concatenate([arm, arm])
