@@ -10,6 +10,7 @@ Outputs (deterministic: same specs, same bytes):
 
 from __future__ import annotations
 
+import difflib
 import hashlib
 import json
 from dataclasses import dataclass
@@ -23,6 +24,7 @@ from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.splits import Splits, TestTask, episode_seed, generate
 from robofollow.compiler.training import check_training
 from robofollow.compiler.world import World
+from robofollow.errors import RoboFollowError
 from robofollow.oracle.audit import audit, findings
 
 
@@ -59,6 +61,30 @@ def episodes(compiled: Compiled, task: TestTask) -> list[dict]:
         record["hash"] = hashlib.sha256(content.encode()).hexdigest()[:16]
         records.append(record)
     return records
+
+
+def all_episodes(compiled: Compiled) -> list[dict]:
+    """Every episode of every level, in scene, level and task order."""
+    return [record for scene in compiled.spec.scenes for level in LEVELS
+            for task in compiled.splits.of(scene, level) for record in episodes(compiled, task)]
+
+
+class UnknownEpisodeError(RoboFollowError):
+    """An episode id that the compiled benchmark does not have."""
+
+
+def find_episode(compiled: Compiled, episode_id: str) -> dict:
+    """The episode with this id (`<scene>/<level>/<task>#r<round>`)."""
+    task_id, _, _ = episode_id.partition("#")
+    for task in compiled.splits.tasks:
+        if task.id == task_id:
+            for record in episodes(compiled, task):
+                if record["episode"] == episode_id:
+                    return record
+    close = difflib.get_close_matches(task_id, [t.id for t in compiled.splits.tasks], n=3)
+    hint = f"; did you mean {', '.join(c + '#r1' for c in close)}?" if close else ""
+    raise UnknownEpisodeError(f"no episode {episode_id!r} in the compiled benchmark (ids look "
+                              f"like scene1/L0/pickup_yellow_block_2#r1){hint}")
 
 
 def summary(compiled: Compiled) -> str:

@@ -1,0 +1,94 @@
+"""The scripted expert on every compiled episode (every task, every round), rendering off.
+
+    python bench/expert_success.py [--specs specs] [--workers 2] [--levels L0,L1,L2,L3]
+                                   [--scenes scene1,...] [--rounds N] [--json out.json]
+
+Prints the share of episodes whose behaviour was achieved per scene x level, and every
+failure with its cause. Targets: >= 99% overall and no cell below 97%.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import multiprocessing
+import sys
+import time
+from collections import defaultdict
+from pathlib import Path
+
+from tqdm import tqdm
+
+from robofollow.build import all_episodes, compile_specs
+from robofollow.compiler.spec import LEVELS
+
+ROOT = Path(__file__).resolve().parent.parent
+_SCENES = {}
+
+
+def _init(specs: str) -> None:
+    import robofollow.sim  # noqa: F401  (headless GL before MuJoCo loads)
+
+    _SCENES.update(compile_specs(Path(specs)).spec.scenes)
+
+
+def _run(episode: dict) -> dict:
+    from robofollow.sim.rollout import run_expert
+
+    try:
+        result = run_expert(_SCENES[episode["scene"]], episode).summary()
+    except Exception as error:  # a crash is a failure with its cause, not a lost episode
+        result = {"episode": episode["episode"], "achieved": False, "steps": 0, "seconds": 0.0,
+                  "reasons": [f"{type(error).__name__}: {error}"]}
+    return dict(result, scene=episode["scene"], level=episode["level"])
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--specs", default=str(ROOT / "specs"))
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--levels", default=",".join(LEVELS))
+    parser.add_argument("--scenes", default="")
+    parser.add_argument("--rounds", type=int, default=None, help="only the first N rounds")
+    parser.add_argument("--json", help="write every result to this file")
+    args = parser.parse_args(argv)
+    compiled = compile_specs(Path(args.specs))
+    levels, scenes = args.levels.split(","), [s for s in args.scenes.split(",") if s]
+    todo = [e for e in all_episodes(compiled) if e["level"] in levels
+            and (not scenes or e["scene"] in scenes)
+            and (args.rounds is None or e["round"] <= args.rounds)]
+    began = time.perf_counter()
+    with multiprocessing.get_context("spawn").Pool(args.workers, _init, (args.specs,)) as pool:
+        results = list(tqdm(pool.imap_unordered(_run, todo, chunksize=4), total=len(todo),
+                            desc="expert episodes", unit="ep", mininterval=10))
+    wall = time.perf_counter() - began
+    cells: dict[tuple[str, str], list[bool]] = defaultdict(list)
+    for result in results:
+        cells[result["scene"], result["level"]].append(result["achieved"])
+    print(f"\nexpert achieved (% of episodes), {len(results)} episodes, {args.workers} workers, "
+          f"{wall / 60:.1f} min wall, {sum(r['seconds'] for r in results) / len(results):.2f} s "
+          "per episode in a worker")
+    print(f"{'':10}" + "".join(f"{level:>16}" for level in levels))
+    for scene in sorted({s for s, _ in cells}):
+        row = []
+        for level in levels:
+            done = cells.get((scene, level), [])
+            row.append(f"{100 * sum(done) / len(done):6.1f} ({sum(done):4}/{len(done):4})"
+                       if done else f"{'-':>16}")
+        print(f"{scene:<10}" + "".join(f"{cell:>16}" for cell in row))
+    total = sum(r["achieved"] for r in results)
+    worst = min(100 * sum(v) / len(v) for v in cells.values())
+    print(f"overall {100 * total / len(results):.2f}% ({total}/{len(results)}); "
+          f"lowest cell {worst:.1f}%")
+    failures = sorted((r for r in results if not r["achieved"]), key=lambda r: r["episode"])
+    print(f"\nfailures: {len(failures) or 'none'}")
+    for failure in failures:
+        print(f"  {failure['episode']}: {'; '.join(failure['reasons'])}")
+    if args.json:
+        Path(args.json).write_text(json.dumps(sorted(results, key=lambda r: r["episode"]),
+                                              indent=1) + "\n")
+    return 0 if 100 * total / len(results) >= 99 and worst >= 97 else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,69 @@
+"""Per-control-step recording of a Simulation into a plain numpy Trajectory."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+
+from robofollow.sim import robot
+from robofollow.sim.simulation import CONTROL_HZ, Simulation
+from robofollow.trajectory import CONTACT_EXTRAS, Trajectory
+
+
+class Recorder:
+    """Collects frames: call `frame(action)` after every control step (and once at start)."""
+
+    def __init__(self, sim: Simulation, meta: dict | None = None):
+        self.sim, self.meta = sim, dict(meta or {}, control_hz=CONTROL_HZ)
+        model = sim.model
+        names = list(sim.bodies) + list(CONTACT_EXTRAS)
+        group = {model.body(b).id: names.index(b) for b in sim.bodies}
+        for arm in robot.ARMS:
+            gripper = names.index(f"{arm}_gripper")
+            for part in ("gripper_link", "finger_a", "finger_b"):
+                group[model.body(f"{arm}/{part}").id] = gripper
+        self.geom_group = np.array([group.get(int(model.geom_bodyid[g]), -1)
+                                    for g in range(model.ngeom)])
+        self.geom_group[model.geom("table").id] = names.index("table")
+        self.fingers = [(model.geom(f"{arm}/finger_a").id, model.geom(f"{arm}/finger_b").id)
+                        for arm in robot.ARMS]
+        self.geom_body = np.array([names.index(b) if b in sim.bodies else -1 for b in
+                                   (model.body(int(model.geom_bodyid[g])).name
+                                    for g in range(model.ngeom))])
+        self.size = len(names)
+        self.frames: dict[str, list] = {k: [] for k in (
+            "time", "state", "action", "positions", "quaternions", "ee_positions",
+            "ee_quaternions", "grasped", "contacts")}
+
+    def frame(self, action: np.ndarray) -> None:
+        sim, data, frames = self.sim, self.sim.data, self.frames
+        frames["time"].append(data.time)
+        frames["state"].append(sim.state())
+        frames["action"].append(np.asarray(action, dtype=float).copy())
+        frames["positions"].append(sim.positions())
+        frames["quaternions"].append(sim.quaternions())
+        frames["ee_positions"].append(data.site_xpos[sim.tcp_sites].copy())
+        quats = np.zeros((2, 4))
+        for arm, site in enumerate(sim.tcp_sites):
+            mujoco.mju_mat2Quat(quats[arm], data.site_xmat[site])
+        frames["ee_quaternions"].append(quats)
+        contacts = np.zeros((self.size, self.size), dtype=bool)
+        touching: dict[int, set[int]] = {}
+        for contact in data.contact[:data.ncon]:
+            a, b = self.geom_group[contact.geom1], self.geom_group[contact.geom2]
+            if a >= 0 and b >= 0 and a != b:
+                contacts[a, b] = contacts[b, a] = True
+            for geom, other in ((contact.geom1, contact.geom2), (contact.geom2, contact.geom1)):
+                touching.setdefault(int(geom), set()).add(int(self.geom_body[other]))
+        held = []
+        for finger_a, finger_b in self.fingers:
+            common = touching.get(finger_a, set()) & touching.get(finger_b, set()) - {-1}
+            held.append(min(common) if common else -1)
+        frames["grasped"].append(held)
+        frames["contacts"].append(contacts)
+
+    def trajectory(self) -> Trajectory:
+        frames = {k: np.array(v) for k, v in self.frames.items()}
+        frames["grasped"] = frames["grasped"].astype(np.int16)
+        movable = np.array([b in self.sim.movable for b in self.sim.bodies])
+        return Trajectory(bodies=tuple(self.sim.bodies), movable=movable, meta=self.meta, **frames)
