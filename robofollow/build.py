@@ -14,6 +14,7 @@ import difflib
 import hashlib
 import json
 from dataclasses import dataclass
+from functools import lru_cache
 from pathlib import Path
 
 from robofollow.compiler import lf
@@ -37,6 +38,23 @@ class Compiled:
 
 def compile_specs(specs: Path | list[Path]) -> Compiled:
     """Load, check, generate and audit; raises SpecErrors on bad specs."""
+    if isinstance(specs, Path):
+        return _compile_cached(specs.resolve(), _mtimes(specs))
+    return _compile(specs)
+
+
+def _mtimes(folder: Path) -> tuple:
+    files = sorted(folder.glob("*.rf")) if folder.is_dir() else [folder]
+    return tuple((str(f), f.stat().st_mtime_ns) for f in files if f.exists())
+
+
+@lru_cache(maxsize=4)
+def _compile_cached(specs: Path, _mtimes: tuple) -> Compiled:
+    """One compile per specs folder and file state, per process (compiled results are frozen)."""
+    return _compile(specs)
+
+
+def _compile(specs: Path | list[Path]) -> Compiled:
     spec = load_spec(specs)
     training = check_training(spec)
     splits = generate(spec, training)

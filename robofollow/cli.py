@@ -90,6 +90,67 @@ def cmd_audit(args) -> int:
     return 0 if clean(compiled) else 1
 
 
+def _size(text: str) -> tuple[int, int]:
+    try:
+        width, height = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT such as 320x240, got {text!r}")
+    if not (16 <= width <= 4096 and 16 <= height <= 4096):
+        raise argparse.ArgumentTypeError(f"image size {text} is out of range (16..4096)")
+    return width, height
+
+
+def cmd_expert(args) -> int:
+    import robofollow.sim  # noqa: F401  (headless GL before MuJoCo loads)
+    from robofollow.build import compile_specs, find_episode
+    from robofollow.sim.rollout import run_expert
+    from robofollow.sim.simulation import CONTROL_HZ
+    from robofollow.sim.video import write_video
+
+    compiled = compile_specs(Path(args.specs))
+    episode = find_episode(compiled, args.episode)
+    width, height = args.image_size
+    result = run_expert(compiled.spec.scenes[episode["scene"]], episode,
+                        render=bool(args.video), width=width, height=height)
+    if args.video:
+        write_video(args.video, result.frames, CONTROL_HZ)
+    if args.trajectory:
+        result.trajectory.save(args.trajectory)
+    if args.json:
+        print(json.dumps(dict(result.summary(), instruction=episode["instruction"])))
+    else:
+        verdict = "achieved" if result.achieved else "NOT achieved"
+        print(f"{episode['episode']}: {verdict} in {result.steps} control steps "
+              f"({result.steps / CONTROL_HZ:.1f} s simulated, {result.seconds:.2f} s wall)")
+        print(f"  instruction: {episode['instruction']}")
+        for reason in result.reasons:
+            print(f"  - {reason}")
+        for label, path in (("video", args.video), ("trajectory", args.trajectory)):
+            if path:
+                print(f"  {label}: {path}")
+    return 0 if result.achieved else 1
+
+
+def cmd_render(args) -> int:
+    import robofollow.sim  # noqa: F401  (headless GL before MuJoCo loads)
+    from robofollow.build import compile_specs
+    from robofollow.sim.picture import layout_picture
+
+    compiled = compile_specs(Path(args.specs))
+    scenes = compiled.spec.scenes
+    if args.scene not in scenes:
+        raise RoboFollowError(f"no scene {args.scene!r}; scenes: {', '.join(scenes)}")
+    layouts = scenes[args.scene].layouts
+    layout = args.layout or next(iter(layouts))
+    if layout not in layouts:
+        raise RoboFollowError(f"scene {args.scene} has no layout {layout!r}; layouts: "
+                              f"{', '.join(layouts)}")
+    width, height = args.image_size
+    layout_picture(scenes[args.scene], layout, args.seed, width, height).save(args.output)
+    print(f"{args.scene}/{layout} drawn to {args.output}")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="robofollow",
@@ -130,6 +191,40 @@ def build_parser() -> argparse.ArgumentParser:
                    help="a spec file or a folder of .rf files (default: specs)")
     p.add_argument("--json", action="store_true", help="print the audit as one JSON object")
     p.set_defaults(handler=cmd_audit)
+
+    p = commands.add_parser(
+        "expert", help="run the scripted expert on one compiled episode in MuJoCo",
+        description="Reset the episode's layout with its seed, execute the expert's compiled "
+                    "plan, and check the behaviour's end state geometrically. Exit status 1 "
+                    "when the behaviour was not achieved.",
+        epilog="example:\n  robofollow expert --episode 'scene2/L0/pickup_left_cube#r1' "
+               "--video out.mp4", formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--episode", required=True, metavar="ID",
+                   help="episode id, <scene>/<level>/<task>#r<round> (see episodes/*.jsonl "
+                        "of `robofollow compile`)")
+    p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
+    p.add_argument("--video", metavar="OUT.mp4",
+                   help="write the three cameras side by side as an mp4")
+    p.add_argument("--trajectory", metavar="OUT.npz", help="save the recorded trajectory")
+    p.add_argument("--image-size", type=_size, default=(320, 240), metavar="WxH",
+                   help="camera image size for --video (default: 320x240)")
+    p.add_argument("--json", action="store_true",
+                   help="print one JSON object: episode, achieved, reasons, steps, seconds")
+    p.set_defaults(handler=cmd_expert)
+
+    p = commands.add_parser(
+        "render", help="draw a layout: head camera and a labelled top view",
+        description="Build a scene layout in MuJoCo, let it settle, and save the head camera "
+                    "image beside a top view with every body's name.")
+    p.add_argument("--scene", required=True, help="scene id, e.g. scene1")
+    p.add_argument("--layout", help="layout name (default: the scene's first layout)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.png", help="image file")
+    p.add_argument("--seed", type=int, help="apply this episode seed's jitter "
+                                            "(default: nominal positions)")
+    p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
+    p.add_argument("--image-size", type=_size, default=(640, 480), metavar="WxH",
+                   help="size of each of the two views (default: 640x480)")
+    p.set_defaults(handler=cmd_render)
     return parser
 
 

@@ -37,7 +37,7 @@ class CameraSpec:
 
 
 CAMERAS = (
-    CameraSpec("cam_high", (0.0, -0.72, 1.30), (0.0, -0.08, 0.74), 42.0),
+    CameraSpec("cam_high", (0.0, -0.52, 1.28), (0.0, -0.06, 0.74), 48.0),
     CameraSpec("cam_top", (0.0, -0.10, 1.60), (0.0, -0.10, 0.74), 0.62, orthographic=True),
 )
 WRIST_FOVY = 75.0  # deg

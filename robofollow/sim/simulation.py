@@ -64,14 +64,16 @@ class Simulation:
 
     # -- episode start ---------------------------------------------------------------------
 
-    def reset(self, seed: int) -> World:
-        """Place the layout with the seed's jitter, arms at home, and let it settle.
+    def reset(self, seed: int | None) -> World:
+        """Place the layout with the seed's jitter (none for seed None: nominal positions),
+        arms at home, and let it settle.
 
         Returns the world as settled (measured positions). Raises UnstableLayoutError naming
         the object if anything drifts or tilts beyond the named tolerances while settling.
         """
         model, data = self.model, self.data
-        offsets = sample_offsets(self.scene, self.layout, np.random.default_rng(seed))
+        offsets = (sample_offsets(self.scene, self.layout, np.random.default_rng(seed))
+                   if seed is not None else {})
         world = World(self.scene, self.layout, offsets)
         mujoco.mj_resetData(model, data)
         model.body_pos[:] = self.nominal_body_pos

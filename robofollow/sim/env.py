@@ -1,0 +1,117 @@
+"""A Gymnasium 1.x environment over the compiled benchmark's episodes.
+
+    env = RoboFollowEnv()                       # the built-in specs, first episode
+    obs, info = env.reset(options={"episode": "scene2/L0/pickup_left_cube#r1"})
+    obs, reward, terminated, truncated, info = env.step(action)   # 14-D joint targets
+
+Observation: {"images": {cam_high, cam_left_wrist, cam_right_wrist} (H, W, 3) uint8,
+"state": 14-D joints (grippers normalised, 1 open), "instruction": the episode's text}.
+The episode fixes layout, instruction and jitter seed; `reset(seed=...)` overrides the seed.
+Reward is always 0 and nothing terminates early: the oracle scores the recorded trajectory
+(`env.trajectory()`), as the benchmark's protocol runs a fixed action budget.
+"""
+
+from __future__ import annotations
+
+import string
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from robofollow.build import all_episodes, compile_specs, find_episode
+from robofollow.resources import builtin_specs
+from robofollow.sim import robot
+from robofollow.sim.cameras import CAMERA_NAMES, Cameras
+from robofollow.sim.recorder import Recorder
+from robofollow.sim.simulation import CONTROL_HZ, Simulation
+from robofollow.trajectory import Trajectory
+
+MAX_STEPS = 500  # control steps before truncation (upstream's 10 chunks x 50 actions)
+INSTRUCTION_CHARSET = frozenset(string.printable) - frozenset("\t\n\r\x0b\x0c")
+
+
+class RoboFollowEnv(gym.Env):
+    metadata = {"render_modes": ["rgb_array"], "render_fps": CONTROL_HZ}
+
+    def __init__(self, episode: str | dict | None = None, specs: str | Path | None = None,
+                 width: int = 320, height: int = 240, max_steps: int = MAX_STEPS,
+                 render_mode: str | None = "rgb_array"):
+        self.compiled = compile_specs(Path(specs) if specs else builtin_specs())
+        self.default_episode = self._episode(episode) if episode else all_episodes(self.compiled)[0]
+        self.width, self.height, self.max_steps = width, height, max_steps
+        self.render_mode = render_mode
+        image = spaces.Box(0, 255, (height, width, 3), np.uint8)
+        self.observation_space = spaces.Dict({
+            "images": spaces.Dict({name: image for name in CAMERA_NAMES}),
+            "state": spaces.Box(robot.ACTION_LOW.astype(np.float32),
+                                robot.ACTION_HIGH.astype(np.float32), dtype=np.float32),
+            "instruction": spaces.Text(max_length=1000, min_length=0,
+                                       charset=INSTRUCTION_CHARSET),
+        })
+        self.action_space = spaces.Box(robot.ACTION_LOW.astype(np.float32),
+                                       robot.ACTION_HIGH.astype(np.float32), dtype=np.float32)
+        self.sim: Simulation | None = None
+        self.cameras: Cameras | None = None
+        self.recorder: Recorder | None = None
+        self.episode: dict = self.default_episode
+        self.steps = 0
+        self.command = robot.home_state()
+
+    def _episode(self, episode: str | dict) -> dict:
+        return find_episode(self.compiled, episode) if isinstance(episode, str) else episode
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        episode = (options or {}).get("episode")
+        self.episode = self._episode(episode) if episode else self.default_episode
+        scene = self.compiled.spec.scenes[self.episode["scene"]]
+        if self.sim is None or (self.sim.scene.id, self.sim.layout) != (scene.id, self.episode["layout"]):
+            self.close()
+            self.sim = Simulation(scene, self.episode["layout"], self.width, self.height)
+            self.cameras = Cameras(self.sim, self.width, self.height)
+        jitter_seed = self.episode["seed"] if seed is None else seed
+        self.sim.reset(jitter_seed)
+        self.steps, self.command = 0, robot.home_state()
+        self.recorder = Recorder(self.sim, {"episode": self.episode["episode"],
+                                            "scene": scene.id, "layout": self.episode["layout"],
+                                            "seed": jitter_seed})
+        self.recorder.frame(self.command)
+        return self._observation(), self._info()
+
+    def step(self, action):
+        if self.sim is None:
+            raise RuntimeError("call reset() before step()")
+        action = np.asarray(action, dtype=np.float64).reshape(-1)
+        if action.shape != (14,) or not np.all(np.isfinite(action)):
+            raise ValueError(f"an action is 14 finite joint targets, got shape {action.shape}")
+        self.command = np.clip(action, robot.ACTION_LOW, robot.ACTION_HIGH)
+        self.sim.step(self.command)
+        self.steps += 1
+        self.recorder.frame(self.command)
+        truncated = self.steps >= self.max_steps
+        return self._observation(), 0.0, False, truncated, self._info()
+
+    def _observation(self) -> dict:
+        state = np.clip(self.sim.state(), robot.ACTION_LOW, robot.ACTION_HIGH).astype(np.float32)
+        return {"images": self.cameras.images(), "state": state,
+                "instruction": self.episode["instruction"]}
+
+    def _info(self) -> dict:
+        return {"episode": self.episode["episode"], "scene": self.episode["scene"],
+                "level": self.episode["level"], "layout": self.episode["layout"],
+                "seed": self.recorder.meta["seed"], "step": self.steps}
+
+    def trajectory(self) -> Trajectory:
+        """The episode so far, one frame per control step (frame 0 = the settled start)."""
+        return self.recorder.trajectory()
+
+    def render(self):
+        return self.cameras.render("cam_high") if self.cameras else None
+
+    def close(self) -> None:
+        if self.cameras is not None:
+            self.cameras.close()
+            self.cameras = None
+        self.sim = None
