@@ -27,8 +27,6 @@ _SCENES = {}
 
 
 def _init(specs: str) -> None:
-    import robofollow.sim  # noqa: F401  (headless GL before MuJoCo loads)
-
     _SCENES.update(compile_specs(Path(specs)).spec.scenes)
 
 

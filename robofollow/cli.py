@@ -101,7 +101,6 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def cmd_expert(args) -> int:
-    import robofollow.sim  # noqa: F401  (headless GL before MuJoCo loads)
     from robofollow.build import compile_specs, find_episode
     from robofollow.sim.rollout import run_expert
     from robofollow.sim.simulation import CONTROL_HZ
@@ -132,7 +131,6 @@ def cmd_expert(args) -> int:
 
 
 def cmd_render(args) -> int:
-    import robofollow.sim  # noqa: F401  (headless GL before MuJoCo loads)
     from robofollow.build import compile_specs
     from robofollow.sim.picture import layout_picture
 

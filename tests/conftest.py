@@ -1,8 +1,12 @@
-"""Hypothesis profiles: `dev` (quick, default) and `ci` (more examples, derandomized)."""
+"""Hypothesis profiles: `dev` (quick, default) and `ci` (more examples, derandomized); and
+RoboFollow imported first, so MuJoCo loads with the headless GL default whatever the test
+modules import first."""
 
 import os
 
 from hypothesis import HealthCheck, settings
+
+import robofollow  # noqa: F401
 
 settings.register_profile("dev", max_examples=60, deadline=None)
 settings.register_profile("ci", max_examples=400, deadline=None, derandomize=True,

@@ -5,9 +5,14 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from robofollow.errors import RoboFollowError
 from robofollow.sim.simulation import Simulation
 
 CAMERA_NAMES = ("cam_high", "cam_left_wrist", "cam_right_wrist")
+
+
+class RenderingError(RoboFollowError):
+    """No OpenGL context for offscreen rendering."""
 
 
 class Cameras:
@@ -15,11 +20,29 @@ class Cameras:
 
     def __init__(self, sim: Simulation, width: int = 320, height: int = 240):
         self.sim, self.width, self.height = sim, width, height
-        self.renderer = mujoco.Renderer(sim.model, height, width)
+        try:
+            self.renderer = mujoco.Renderer(sim.model, height, width)
+        except mujoco.FatalError as error:
+            raise RenderingError(
+                f"MuJoCo cannot render ({error}). Headless rendering needs Mesa EGL (./setup.sh "
+                "installs it) and MUJOCO_GL=egl set before mujoco is first imported (importing "
+                "robofollow first does that)") from None
 
     def render(self, camera: str) -> np.ndarray:
         self.renderer.update_scene(self.sim.data, camera)
         return self.renderer.render()
+
+    def project(self, camera: str, point) -> tuple[float, float] | None:
+        """Pixel (column, row) where a world point appears in a perspective camera's image,
+        or None when it is behind the camera."""
+        model, data = self.sim.model, self.sim.data
+        index = model.camera(camera).id
+        rotation = data.cam_xmat[index].reshape(3, 3)
+        x, y, z = rotation.T @ (np.asarray(point, dtype=float) - data.cam_xpos[index])
+        if z >= 0:  # cameras look along their -z axis
+            return None
+        focal = self.height / 2 / np.tan(np.radians(model.cam_fovy[index]) / 2)
+        return self.width / 2 + focal * x / -z, self.height / 2 - focal * y / -z
 
     def images(self) -> dict[str, np.ndarray]:
         """(height, width, 3) uint8 images of cam_high, cam_left_wrist, cam_right_wrist."""

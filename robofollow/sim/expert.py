@@ -85,7 +85,7 @@ class Expert:
             if point.position is None:
                 path = _joint_path(start, robot.HOME)
             elif at_home[arm]:
-                path = _joint_path(start, self._reach(arm, np.array(point.position), yaw))
+                path = _joint_path(start, self.reach(arm, np.array(point.position), yaw))
             else:
                 path = self._cartesian(self.iks[arm], start, np.array(point.position), yaw)
             at_home[arm] = point.position is None
@@ -102,7 +102,7 @@ class Expert:
         actions += [command.copy()] * FINAL_STEPS
         return np.array(actions)
 
-    def _reach(self, arm: int, target: np.ndarray, yaw: float) -> np.ndarray:
+    def reach(self, arm: int, target: np.ndarray, yaw: float) -> np.ndarray:
         """IK for a pose reached from home: seeded facing the target, wrist pointing down."""
         base_x, base_y = robot.BASE_XY[robot.ARMS[arm]]
         waist = math.atan2(-(target[0] - base_x), target[1] - base_y)  # the base faces +y

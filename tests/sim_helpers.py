@@ -1,0 +1,17 @@
+"""Shared set-up for the simulation tests: the compiled built-in benchmark, once per session."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+from robofollow.build import Compiled, all_episodes, compile_specs
+from robofollow.resources import builtin_specs
+
+
+@lru_cache(maxsize=1)
+def benchmark() -> Compiled:
+    return compile_specs(builtin_specs())
+
+
+def episode(episode_id: str) -> dict:
+    return next(e for e in all_episodes(benchmark()) if e["episode"] == episode_id)

@@ -1,0 +1,131 @@
+"""Scene building, episode start (jitter, settling, stability) and rendering."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+
+from robofollow.compiler.spec_loader import load_spec
+from robofollow.sim import robot
+from robofollow.sim.cameras import CAMERA_NAMES, Cameras
+from robofollow.sim.simulation import STABLE_DRIFT, Simulation, UnstableLayoutError
+from tests.sim_helpers import benchmark
+
+LAYOUTS = [(s.id, layout) for s in benchmark().spec.scenes.values() for layout in s.layouts]
+
+
+@pytest.mark.parametrize("scene, layout", LAYOUTS)
+def test_every_layout_builds_and_settles(scene, layout):
+    spec_scene = benchmark().spec.scenes[scene]
+    sim = Simulation(spec_scene, layout)
+    model = sim.model
+    assert model.nu == 16  # 6 joints + 2 fingers per arm
+    assert {model.camera(i).name for i in range(model.ncam)} >= set(CAMERA_NAMES)
+    world = sim.reset(7)
+    for body, pose in world.poses.items():
+        placed = spec_scene.layouts[layout].placed[body]
+        jitter = spec_scene.jitter_of(body if placed.support is None else placed.support)
+        margin = STABLE_DRIFT + 0.003
+        assert jitter.x[0] - margin <= pose.x - placed.x <= jitter.x[1] + margin, body
+        assert jitter.y[0] - margin <= pose.y - placed.y <= jitter.y[1] + margin, body
+        assert abs(pose.z - placed.z) <= 0.004, body
+
+
+def test_robot_has_the_viperx_joint_limits():
+    sim = Simulation(benchmark().spec.scenes["scene1"], "default")
+    for arm in robot.ARMS:
+        for name, low, high in zip(robot.ARM_JOINTS, robot.JOINT_LOW, robot.JOINT_HIGH):
+            joint = sim.model.joint(f"{arm}/{name}")
+            assert tuple(joint.range) == pytest.approx((low, high))
+            assert sim.model.jnt_limited[joint.id]
+
+
+def test_same_seed_same_start_and_other_seed_other_start():
+    scene = benchmark().spec.scenes["scene4"]
+    a, b = Simulation(scene, "scene4_1"), Simulation(scene, "scene4_1")
+    a.reset(11)
+    b.reset(11)
+    assert np.array_equal(a.data.qpos, b.data.qpos)
+    assert np.array_equal(a.model.body_pos, b.model.body_pos)  # the jittered bowl too
+    b.reset(12)
+    assert not np.allclose(a.positions(), b.positions())
+
+
+def test_nominal_start_without_seed():
+    scene = benchmark().spec.scenes["scene1"]
+    world = Simulation(scene, "default").reset(None)
+    for body, placed in scene.layouts["default"].placed.items():
+        assert world.poses[body].x == pytest.approx(placed.x, abs=2e-3)
+        assert world.poses[body].y == pytest.approx(placed.y, abs=2e-3)
+
+
+UNSTABLE = """\
+scene wobbly "A cube beyond the table's edge" {
+    object box cube half=0.02 color=blue rgb=(0, 0, 1) mass=0.2 friction=0.5
+    layout edge {
+        box at (0.0, 0.31)
+    }
+    task pick_box on edge {
+        "Pick up the blue cube with your left arm."
+        expect pick left box
+    }
+}
+"""
+
+
+def test_an_infeasible_layout_fails_naming_the_object(tmp_path):
+    (tmp_path / "wobbly.rf").write_text(UNSTABLE)
+    scene = load_spec(tmp_path).scenes["wobbly"]  # the table's far edge is at y = 0.30
+    with pytest.raises(UnstableLayoutError, match=r"wobbly/edge is not stable: box moved"):
+        Simulation(scene, "edge").reset(0)
+
+
+def _dominant(pixel: np.ndarray) -> str:
+    r, g, b = (int(v) for v in pixel)
+    if r > g + 60 and r > b + 60:
+        return "red"
+    if g > r + 60 and g > b + 60:
+        return "green"
+    if b > r + 60 and b > g + 60:
+        return "blue"
+    if r > b + 60 and g > b + 60:
+        return "yellow"
+    return "other"
+
+
+@pytest.mark.parametrize("scene, layout", [("scene1", "default"), ("scene2", "scene2_3"),
+                                           ("scene3", "scene3_1"), ("scene4", "scene4_7")])
+def test_each_object_shows_its_colour_where_it_projects_in_cam_high(scene, layout):
+    spec_scene = benchmark().spec.scenes[scene]
+    sim = Simulation(spec_scene, layout)
+    world = sim.reset(3)
+    with Cameras(sim) as cameras:
+        image = cameras.render("cam_high")
+        assert image.shape == (240, 320, 3) and image.dtype == np.uint8
+        placed = spec_scene.layouts[layout].placed
+        covered = {p.support for p in placed.values() if p.support}  # something on or in it
+        for body, pose in world.poses.items():
+            if body in covered:
+                continue
+            top = (pose.x, pose.y, world.top(body) - 0.002)
+            u, v = cameras.project("cam_high", top)
+            patch = image[int(v) - 1:int(v) + 2, int(u) - 1:int(u) + 2].reshape(-1, 3)
+            colour = _dominant(np.median(patch, axis=0))
+            assert colour == spec_scene.bodies[body].color, (body, u, v, colour)
+
+
+def test_images_are_identical_for_identical_states_and_sizes_configurable():
+    scene = benchmark().spec.scenes["scene2"]
+    sim = Simulation(scene, "default", 160, 120)
+    sim.reset(5)
+    with Cameras(sim, 160, 120) as cameras:
+        first = cameras.images()
+        sim.reset(5)
+        again = cameras.images()
+        for name in CAMERA_NAMES:
+            assert first[name].shape == (120, 160, 3)
+            assert np.array_equal(first[name], again[name])
+        assert not np.array_equal(first["cam_high"], first["cam_left_wrist"])
+        mujoco.mj_step(sim.model, sim.data)  # stays renderable after stepping
+        assert cameras.render("cam_high").std() > 10  # a real picture, not a blank frame
