@@ -24,7 +24,7 @@ YAW_TOLERANCE_DEG = 20.0  # deg: final orientation error (modulo 180 deg)
 
 
 def world_at(trajectory: Trajectory, scene: Scene, frame: int) -> World:
-    positions = {b: tuple(p) for b, p in zip(trajectory.bodies, trajectory.positions[frame])}
+    positions = {b: tuple(p) for b, p in zip(trajectory.bodies, trajectory.positions[frame], strict=True)}
     return World(scene, trajectory.meta["layout"], positions=positions)
 
 

@@ -91,7 +91,7 @@ class Expert:
             at_home[arm] = point.position is None
             gripper = command[7 * arm + 6]
             ramp = np.linspace(gripper, point.gripper, len(path) + 1)[1:] if path else []
-            for q, g in zip(path, ramp):
+            for q, g in zip(path, ramp, strict=True):
                 command[joints], command[7 * arm + 6] = q, g
                 actions.append(command.copy())
             if not path and gripper != point.gripper:

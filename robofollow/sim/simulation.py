@@ -148,6 +148,6 @@ class Simulation:
 
     def world(self) -> World:
         """The layout's bodies where they are now."""
-        positions = {b: tuple(p) for b, p in zip(self.bodies, self.positions())}
+        positions = {b: tuple(p) for b, p in zip(self.bodies, self.positions(), strict=True)}
         return World(self.scene, self.layout, positions=positions)
 

@@ -1,0 +1,124 @@
+"""Simulation throughput: raw physics, the env with three cameras, and the env's overhead.
+
+    python bench/sim_bench.py [--runs 5] [--steps 150] [--scene scene4 --layout scene4_1]
+
+Reports medians over runs of:
+  - raw physics steps/s of the scene (mj_step, arms holding position);
+  - env control steps/s with cam_high + both wrist cameras at 320x240, one process
+    (target >= 50), and the summed rate of 2 processes running at once;
+  - the env's cost as a ratio to bare MuJoCo doing the same work in the same run: the same
+    physics steps plus rendering the same three frames with a bare mujoco.Renderer
+    (target <= 1.15).
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing
+import statistics
+import time
+
+import mujoco
+import numpy as np
+
+from robofollow.build import compile_specs
+from robofollow.resources import builtin_specs
+from robofollow.sim import robot
+from robofollow.sim.cameras import CAMERA_NAMES
+from robofollow.sim.env import RoboFollowEnv
+from robofollow.sim.simulation import SUBSTEPS, Simulation
+
+
+def _episode_of(scene: str, layout: str) -> dict:
+    from robofollow.build import all_episodes
+
+    return next(e for e in all_episodes(compile_specs(builtin_specs()))
+                if e["scene"] == scene and e["layout"] == layout)
+
+
+def raw_physics(scene: str, layout: str, steps: int) -> float:
+    sim = Simulation(compile_specs(builtin_specs()).spec.scenes[scene], layout)
+    sim.reset(0)
+    sim.apply(robot.home_state())
+    began = time.perf_counter()
+    mujoco.mj_step(sim.model, sim.data, nstep=steps)
+    return steps / (time.perf_counter() - began)
+
+
+def _actions(steps: int) -> np.ndarray:
+    """A gentle joint-space sweep, so the arms move and the images change."""
+    home = robot.home_state()
+    phase = np.sin(np.linspace(0, 2 * np.pi, steps))[:, None]
+    sweep = np.zeros(14)
+    sweep[[0, 1, 7, 8]] = (0.4, 0.3, -0.4, 0.3)
+    return home + phase * sweep
+
+
+def env_rate(episode: dict, steps: int) -> float:
+    env = RoboFollowEnv(episode=episode)
+    env.reset()
+    actions = _actions(steps)
+    began = time.perf_counter()
+    for action in actions:
+        env.step(action)
+    elapsed = time.perf_counter() - began
+    env.close()
+    return steps / elapsed
+
+
+def bare_rate(episode: dict, steps: int) -> float:
+    """The same physics and frames with nothing of RoboFollow in the loop."""
+    scene = compile_specs(builtin_specs()).spec.scenes[episode["scene"]]
+    sim = Simulation(scene, episode["layout"])
+    sim.reset(episode["seed"])
+    model, data = sim.model, sim.data
+    renderer = mujoco.Renderer(model, 240, 320)
+    ctrl = [np.r_[a[:6], [a[6] * robot.FINGER_TRAVEL] * 2, a[7:13], [a[13] * robot.FINGER_TRAVEL] * 2]
+            for a in _actions(steps)]
+    began = time.perf_counter()
+    for c in ctrl:
+        data.ctrl[:] = c
+        mujoco.mj_step(model, data, nstep=SUBSTEPS)
+        for camera in CAMERA_NAMES:
+            renderer.update_scene(data, camera)
+            renderer.render()
+    elapsed = time.perf_counter() - began
+    renderer.close()
+    return steps / elapsed
+
+
+def _env_rate_job(args) -> float:
+    return env_rate(*args)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--steps", type=int, default=150)
+    parser.add_argument("--scene", default="scene4")
+    parser.add_argument("--layout", default="scene4_1")
+    args = parser.parse_args()
+    episode = _episode_of(args.scene, args.layout)
+    raw = [raw_physics(args.scene, args.layout, 20000) for _ in range(args.runs)]
+    envs, bares, ratios = [], [], []
+    for _ in range(args.runs):
+        e, b = env_rate(episode, args.steps), bare_rate(episode, args.steps)
+        envs.append(e)
+        bares.append(b)
+        ratios.append(b / e)  # time per step, env over bare
+    pair = []
+    with multiprocessing.get_context("spawn").Pool(2) as pool:
+        for _ in range(args.runs):
+            pair.append(sum(pool.map(_env_rate_job, [(episode, args.steps)] * 2)))
+    print(f"scene {args.scene}/{args.layout}, {args.runs} runs (medians), "
+          f"{SUBSTEPS} physics steps per control step, 3 cameras at 320x240")
+    print(f"raw physics:                 {statistics.median(raw):10,.0f} steps/s")
+    print(f"env, 1 process:              {statistics.median(envs):10.1f} control steps/s "
+          "(target >= 50)")
+    print(f"env, 2 processes together:   {statistics.median(pair):10.1f} control steps/s")
+    print(f"bare MuJoCo, same work:      {statistics.median(bares):10.1f} control steps/s")
+    print(f"env cost / bare cost:        {statistics.median(ratios):10.3f} (target <= 1.15)")
+
+
+if __name__ == "__main__":
+    main()
