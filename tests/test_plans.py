@@ -5,7 +5,8 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.compiler.plans import PLACE_GAP, plan
+from robofollow.compiler.behaviour import Behaviour, Step
+from robofollow.compiler.plans import PLACE_GAP, PUSH_DISTANCE, plan
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.training import check_training
 from robofollow.compiler.world import World
@@ -83,7 +84,23 @@ def test_push_starts_behind_the_object_and_moves_towards_the_target(setup):
     end = next(p for p in result.points if p.name == "push_end").position
     source, target = world.poses["large_blue_cube"], world.poses["large_red_cylinder"]
     assert start[1] < source.y < target.y
-    assert end[1] - start[1] == pytest.approx(0.05)
+    assert end[1] - start[1] == pytest.approx(PUSH_DISTANCE)
+
+
+def test_a_relative_placement_avoids_a_taken_spot(setup):
+    """Right of the red cylinder in scene1_1 is where yellow_block_1 stands: the place spot
+    moves on, still right of the cylinder, clear of the block."""
+    spec, _ = setup
+    scene = spec.scenes["scene1"]
+    world = World(scene, "scene1_1")
+    step = Step(action="place", arm="right", source="yellow_block_3", relation="right_of",
+                target="red_cylinder")
+    place = next(p for p in plan(Behaviour(steps=(step,)), world).points if p.name == "place")
+    block, cylinder = world.poses["yellow_block_1"], world.poses["red_cylinder"]
+    assert max(abs(place.position[0] - block.x), abs(place.position[1] - block.y)) >= 0.05
+    moved = World(scene, "scene1_1", positions={"yellow_block_3": place.position})
+    assert moved.related("yellow_block_3", "right_of", "red_cylinder")
+    assert cylinder.x < place.position[0]
 
 
 def test_sequences_hold_both_objects_until_both_are_up(setup):

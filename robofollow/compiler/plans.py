@@ -15,13 +15,18 @@ from typing import Literal
 from robofollow.compiler.behaviour import Behaviour, Step
 from robofollow.compiler.model import Model
 from robofollow.compiler.splits import passes_over
-from robofollow.compiler.world import DIRECTIONS, World
+from robofollow.compiler.world import DIRECTIONS, RELATION_RANGE, World, in_cone
 
 PRE_GRASP = 0.08  # m: approach height above the grasp point
 LIFT = 0.10  # m: lift after grasping
 PRE_PLACE = 0.06  # m: approach height above the place point
 RETREAT = 0.08  # m: move up after releasing
 PLACE_GAP = 0.04  # m: free space between a placed object and its landmark
+PLACE_CLEARANCE = 0.01  # m: free space kept between a placed object and any other body
+# (further out, sideways) shifts (m) tried in order when the nominal place spot is taken
+PLACE_SHIFTS = ((0.0, 0.0), (0.015, 0.0), (0.0, 0.02), (0.0, -0.02), (0.03, 0.0),
+                (0.015, 0.025), (0.015, -0.025), (0.0, 0.04), (0.0, -0.04), (0.045, 0.0),
+                (0.0, 0.055), (0.0, -0.055), (0.02, 0.06), (0.02, -0.06))
 STACK_CLEARANCE = 0.005  # m: release height above the support's top
 TABLE_CLEARANCE = 0.001  # m: release height above the table
 ROUTE_CLEARANCE = 0.09  # m: carried object's bottom above the highest body on the route
@@ -87,8 +92,24 @@ class _Planner:
         landmark = world.bodies[step.target].half_extents
         reach = (abs(direction[0]) * (landmark[0] + half[0]) +
                  abs(direction[1]) * (landmark[1] + half[1]) + PLACE_GAP)
-        return (target.x + direction[0] * reach, target.y + direction[1] * reach,
-                world.table + half[2] + TABLE_CLEARANCE)
+        spots = [(target.x + direction[0] * (reach + out) - direction[1] * side,
+                  target.y + direction[1] * (reach + out) + direction[0] * side)
+                 for out, side in PLACE_SHIFTS]
+        free = [spot for spot in spots if self.free(spot, step.source)
+                and in_cone(spot[0] - target.x, spot[1] - target.y, direction)
+                and math.dist(spot, (target.x, target.y)) <= RELATION_RANGE]
+        x, y = (free or spots)[0]
+        return (x, y, world.table + half[2] + TABLE_CLEARANCE)
+
+    def free(self, spot: tuple[float, float], source: str) -> bool:
+        """Whether `source` set down at `spot` keeps PLACE_CLEARANCE from every other body."""
+        half = self.world.bodies[source].half_extents
+        for body, pose in self.world.poses.items():
+            other = self.world.bodies[body].half_extents
+            if body != source and (abs(spot[0] - pose.x) < half[0] + other[0] + PLACE_CLEARANCE
+                                   and abs(spot[1] - pose.y) < half[1] + other[1] + PLACE_CLEARANCE):
+                return False
+        return True
 
     def route(self, step: Step, start: tuple[float, float, float]) -> None:
         over = passes_over(step, self.world)
