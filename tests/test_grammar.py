@@ -38,10 +38,14 @@ def test_wheel_ships_the_grammar_and_parses_when_installed(tmp_path):
     names = zipfile.ZipFile(wheel).namelist()
     assert "robofollow/grammar/instruction.lark" in names
     assert "robofollow/compiler/templates/english.j2" in names
+    assert "robofollow/sim/templates/scene.xml.j2" in names
+    assert {f"robofollow/specs/scene{i}.rf" for i in range(1, 5)} <= set(names)
     target = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--target",
                     str(target), str(wheel)], check=True, capture_output=True)
     code = ("import robofollow, sys; from robofollow.compiler.parser import parse; "
+            "from robofollow.resources import builtin_specs; "
+            "assert builtin_specs().is_relative_to(robofollow.__path__[0]); "
             "print(robofollow.__file__); print(parse('Pick up the red cube.').object.noun)")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                             cwd=tmp_path, env={"PYTHONPATH": str(target), "PATH": ""})

@@ -145,13 +145,15 @@ class _Planner:
         z = world.table + PUSH_HEIGHT
         start = (source.x - ux * back, source.y - uy * back, z)
         end = (start[0] + ux * PUSH_DISTANCE, start[1] + uy * PUSH_DISTANCE, z)
-        self.add("pre_push", step.arm, _up(start, LIFT), OPEN)
-        self.add("close", step.arm, _up(start, LIFT), CLOSED)
-        self.add("push_start", step.arm, start, CLOSED)
-        self.add("push_end", step.arm, end, CLOSED)
+        # the closed fingers' wide face (normal along the gripper's z axis) meets the object
+        yaw = (math.degrees(math.atan2(uy, ux)) + 90.0 + 90.0) % 180.0 - 90.0
+        self.add("pre_push", step.arm, _up(start, LIFT), OPEN, yaw)
+        self.add("close", step.arm, _up(start, LIFT), CLOSED, yaw)
+        self.add("push_start", step.arm, start, CLOSED, yaw)
+        self.add("push_end", step.arm, end, CLOSED, yaw)
         backed = (end[0] - ux * PUSH_BACK_OFF, end[1] - uy * PUSH_BACK_OFF, z)
-        self.add("back_off", step.arm, backed, CLOSED)
-        self.add("lift", step.arm, _up(backed, LIFT), CLOSED)
+        self.add("back_off", step.arm, backed, CLOSED, yaw)
+        self.add("lift", step.arm, _up(backed, LIFT), CLOSED, yaw)
         self.add("home", step.arm, None, CLOSED)
 
 
