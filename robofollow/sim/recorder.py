@@ -27,9 +27,6 @@ class Recorder:
         self.geom_group[model.geom("table").id] = names.index("table")
         self.fingers = [(model.geom(f"{arm}/finger_a").id, model.geom(f"{arm}/finger_b").id)
                         for arm in robot.ARMS]
-        self.geom_body = np.array([names.index(b) if b in sim.bodies else -1 for b in
-                                   (model.body(int(model.geom_bodyid[g])).name
-                                    for g in range(model.ngeom))])
         self.size = len(names)
         self.frames: dict[str, list] = {k: [] for k in (
             "time", "state", "action", "positions", "quaternions", "ee_positions",
@@ -53,11 +50,12 @@ class Recorder:
             a, b = self.geom_group[contact.geom1], self.geom_group[contact.geom2]
             if a >= 0 and b >= 0 and a != b:
                 contacts[a, b] = contacts[b, a] = True
-            for geom, other in ((contact.geom1, contact.geom2), (contact.geom2, contact.geom1)):
-                touching.setdefault(int(geom), set()).add(int(self.geom_body[other]))
+            for geom, other in ((contact.geom1, b), (contact.geom2, a)):
+                touching.setdefault(int(geom), set()).add(int(other))
         held = []
+        bodies = set(range(len(sim.bodies)))  # contact groups below this index are bodies
         for finger_a, finger_b in self.fingers:
-            common = touching.get(finger_a, set()) & touching.get(finger_b, set()) - {-1}
+            common = touching.get(finger_a, set()) & touching.get(finger_b, set()) & bodies
             held.append(min(common) if common else -1)
         frames["grasped"].append(held)
         frames["contacts"].append(contacts)

@@ -11,6 +11,7 @@ from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.plans import plan
 from robofollow.compiler.spec import Scene
 from robofollow.oracle.end_state import achieved
+from robofollow.sim import robot
 from robofollow.sim.cameras import Cameras, side_by_side
 from robofollow.sim.expert import Expert
 from robofollow.sim.recorder import Recorder
@@ -44,15 +45,17 @@ def run_expert(scene: Scene, episode: dict, render: bool = False, width: int = 3
     recorder = Recorder(sim, {key: episode[key] for key in ("episode", "scene", "layout", "seed")})
     cameras = Cameras(sim, width, height) if render else None
     frames = []
+
+    def record(action: np.ndarray) -> None:
+        recorder.frame(action)
+        if cameras:
+            frames.append(side_by_side(cameras.images()))
+
     try:
-        previous = actions[0]
-        for action in [None, *actions]:
-            if action is not None:
-                sim.step(action)
-                previous = action
-            recorder.frame(previous)
-            if cameras:
-                frames.append(side_by_side(cameras.images()))
+        record(robot.home_state())  # frame 0: the settled start, arms at home
+        for action in actions:
+            sim.step(action)
+            record(action)
     finally:
         if cameras:
             cameras.close()
