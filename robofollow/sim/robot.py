@@ -11,7 +11,6 @@ import numpy as np
 
 ARMS = ("left", "right")
 ARM_JOINTS = ("waist", "shoulder", "elbow", "forearm_roll", "wrist_angle", "wrist_rotate")
-STATE_NAMES = tuple(f"{arm}/{name}" for arm in ARMS for name in ARM_JOINTS + ("gripper",))
 
 BASE_XY = {"left": (-0.24, -0.38), "right": (0.24, -0.38)}  # m: arm bases, on the table top
 BASE_YAW = np.pi / 2  # rad: both arms face +y, away from the robot side of the table
@@ -30,7 +29,7 @@ ACTION_LOW = np.concatenate([JOINT_LOW, [0.0], JOINT_LOW, [0.0]])
 ACTION_HIGH = np.concatenate([JOINT_HIGH, [1.0], JOINT_HIGH, [1.0]])
 
 
-def home_state(gripper: float = 1.0) -> np.ndarray:
-    """The 14-D joint target of both arms at rest."""
-    arm = np.concatenate([HOME, [gripper]])
+def home_state() -> np.ndarray:
+    """The 14-D joint target of both arms at rest, grippers open."""
+    arm = np.concatenate([HOME, [1.0]])
     return np.concatenate([arm, arm])

@@ -59,7 +59,6 @@ class Simulation:
         self.finger_ctrl = np.array([[model.actuator(f"{arm}/finger_{s}").id for s in "ab"]
                                      for arm in robot.ARMS])
         self.tcp_sites = np.array([model.site(f"{arm}/tcp").id for arm in robot.ARMS])
-        self.nominal_body_pos = model.body_pos.copy()
         self.start_world: World | None = None
 
     # -- episode start ---------------------------------------------------------------------
@@ -76,19 +75,17 @@ class Simulation:
                    if seed is not None else {})
         world = World(self.scene, self.layout, offsets)
         mujoco.mj_resetData(model, data)
-        model.body_pos[:] = self.nominal_body_pos
-        for body in self.bodies:
+        for body, body_id in zip(self.bodies, self.body_ids, strict=True):
             pose = world.poses[body]
             if body in self.free_qpos:
                 adr = self.free_qpos[body]
                 data.qpos[adr:adr + 7] = (pose.x, pose.y, pose.z + SPAWN_LIFT, 1, 0, 0, 0)
-            else:
-                model.body_pos[model.body(body).id] = (pose.x, pose.y, pose.z)
-        home = robot.home_state()
+            else:  # fixtures are static bodies: every reset places each of them
+                model.body_pos[body_id] = (pose.x, pose.y, pose.z)
         for index in range(2):
             data.qpos[self.arm_qpos[index]] = robot.HOME
             data.qpos[self.finger_qpos[index]] = robot.FINGER_TRAVEL
-        self.apply(home)
+        self.apply(robot.home_state())
         mujoco.mj_forward(model, data)
         start = self.positions()
         for _ in range(SETTLE_STEPS):
@@ -140,11 +137,6 @@ class Simulation:
 
     def quaternions(self) -> np.ndarray:
         return self.data.xquat[self.body_ids].copy()
-
-    def tcp(self, arm: int) -> tuple[np.ndarray, np.ndarray]:
-        """Grasp-centre position and rotation matrix of an arm (0 left, 1 right)."""
-        site = self.tcp_sites[arm]
-        return self.data.site_xpos[site].copy(), self.data.site_xmat[site].reshape(3, 3).copy()
 
     def world(self) -> World:
         """The layout's bodies where they are now."""
