@@ -43,9 +43,9 @@ class _Builder:
         if step.action == "push":
             self.add(f"{prefix}objective", "push", weight, step.arm,
                      _predicate("pushed_towards", object=step.source, target=step.target,
-                                min_displacement=p.push_min_intent, cone_deg=45.0),
+                                min_displacement=p.push_min_intent, cone_deg=p.push_cone_deg),
                      _predicate("pushed_towards", object=step.source, target=step.target,
-                                min_displacement=p.push_min_execution, cone_deg=45.0))
+                                min_displacement=p.push_min_execution, cone_deg=p.push_cone_deg))
         elif step.relation == "on":
             self.add(f"{prefix}objective", "stack", weight, step.arm,
                      _predicate("held_above", object=step.source, target=step.target,

@@ -23,10 +23,14 @@ class ScoringProfile(Model):
     push_close_threshold: float = 0.25  # the gripper is closed before pushing
     # source grounding
     grasp_radius: float = 0.07  # m: end effector to object (xy) at the first close
+    support_xy: float = 0.02  # m: a body this close (xy) below another supports it
+    support_rise: float = 0.005  # m: and at least this much lower
     min_lift: float = 0.01  # m: lift that counts as picked
     pickup_lift: float = 0.03  # m: lift a pickup needs (intrinsic-property scene)
     push_contact_radius: float = 0.08  # m: end effector to pushed object (xy)
     push_height_tolerance: float = 0.12  # m: contact height to the object's initial z
+    push_moved: float = 0.005  # m: a pushed object has started moving (xy)
+    push_cone_deg: float = 45.0  # deg: pushed within this angle of the source-to-target line
     # objectives
     relation_range: float = 0.12  # m: placement relations hold within this distance
     relation_cone_deg: float = 45.0  # deg: and within this angle of the direction

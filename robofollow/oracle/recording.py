@@ -1,0 +1,118 @@
+"""One trajectory prepared for scoring: the arrays every stage reads, and gripper events.
+
+Gripper events read the *commanded* opening (the action), not the measured one: the fingers
+stop at an object's width, so the measured opening of a firm grasp stays well above any close
+threshold, while the command says what the policy meant to do.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from robofollow.compiler.profile import ScoringProfile
+from robofollow.compiler.spec import Scene
+from robofollow.compiler.world import World
+from robofollow.oracle import predicates as P
+from robofollow.trajectory import ARMS, Trajectory
+
+GRIPPER_COLUMNS = (6, 13)  # the gripper entries of the 14-D action, [left, right]
+
+
+@dataclass(frozen=True, slots=True)
+class Grasp:
+    """A close of one arm's gripper near an object."""
+
+    frame: int
+    body: int  # the nearest graspable body (index into the trajectory's bodies)
+    distance: float  # m, gripper to body in the plane
+
+
+class Recording:
+    def __init__(self, trajectory: Trajectory, scene: Scene, profile: ScoringProfile):
+        self.trajectory, self.scene, self.profile = trajectory, scene, profile
+        self.bodies = trajectory.bodies
+        self.positions = np.asarray(trajectory.positions, dtype=float)  # (T, B, 3)
+        self.xy = self.positions[:, :, :2]
+        self.z = self.positions[:, :, 2]
+        self.ee = np.asarray(trajectory.ee_positions, dtype=float)  # (T, 2, 3)
+        self.command = np.asarray(trajectory.action, dtype=float)[:, GRIPPER_COLUMNS]
+        self.half = np.array([scene.bodies[b].half_extents for b in self.bodies], dtype=float)
+        self.graspable = np.flatnonzero([not scene.bodies[b].fixture for b in self.bodies])
+        self.last = len(trajectory) - 1
+        self._events: dict[tuple, np.ndarray] = {}
+        self._grasps: dict[int, list[Grasp]] = {}
+
+    def index(self, body: str) -> int:
+        return self.bodies.index(body)
+
+    def closes(self, arm: int, threshold: float | None = None) -> np.ndarray:
+        """Frames where the arm's gripper closes (falls to the threshold or below)."""
+        threshold = self.profile.close_threshold if threshold is None else threshold
+        key = ("close", arm, threshold)
+        if key not in self._events:
+            self._events[key] = P.falls(self.command[:, arm], threshold)
+        return self._events[key]
+
+    def opens(self, arm: int) -> np.ndarray:
+        """Frames where the arm's gripper opens (rises to the open threshold or above)."""
+        key = ("open", arm)
+        if key not in self._events:
+            self._events[key] = P.rises(self.command[:, arm], self.profile.open_threshold)
+        return self._events[key]
+
+    def grasps(self, arm: int) -> list[Grasp]:
+        """The arm's grasp attempts: closes with a graspable body within the grasp radius
+        (closes in free air are not attempts). The body is the nearest one in the plane that
+        does not carry another body (the top of a stack is what a gripper reaches)."""
+        if arm not in self._grasps:
+            attempts = []
+            for frame in self.closes(arm):
+                frame = int(frame)
+                body, distance = P.nearest(self.xy[frame], self.ee[frame, arm, :2],
+                                           self.reachable(frame))
+                if distance < self.profile.grasp_radius:
+                    attempts.append(Grasp(frame, body, distance))
+            self._grasps[arm] = attempts
+        return self._grasps[arm]
+
+    def reachable(self, frame: int) -> np.ndarray:
+        """Graspable bodies that carry no other graspable body at this frame."""
+        p, support = self.profile, []
+        for body in self.graspable:
+            offset = np.linalg.norm(self.xy[frame, self.graspable] - self.xy[frame, body], axis=1)
+            rise = self.z[frame, self.graspable] - self.z[frame, body]
+            if np.any((offset <= p.support_xy) & (rise >= p.support_rise)):
+                support.append(body)
+        return np.setdiff1d(self.graspable, support)
+
+    def support_of(self, body: int, frame: int) -> int | None:
+        """The body directly under `body` at this frame, if it rests on one."""
+        p = self.profile
+        offset = np.linalg.norm(self.xy[frame] - self.xy[frame, body], axis=1)
+        drop = self.z[frame, body] - self.z[frame]
+        under = np.flatnonzero((offset <= p.support_xy) & (drop >= p.support_rise))
+        under = [b for b in under if b != body]
+        return int(max(under, key=lambda b: self.z[frame, b])) if under else None
+
+    def first_grasp(self, arm: int, after: int = 0) -> Grasp | None:
+        return next((g for g in self.grasps(arm) if g.frame >= after), None)
+
+    def rise(self, body: int, since: int) -> np.ndarray:
+        """(T,) height of a body above where it was at frame `since` (m)."""
+        return self.z[:, body] - self.z[since, body]
+
+    def bottom(self, body: int) -> np.ndarray:
+        return self.z[:, body] - self.half[body, 2]
+
+    def top(self, body: int) -> np.ndarray:
+        return self.z[:, body] + self.half[body, 2]
+
+    def world(self, frame: int) -> World:
+        positions = {b: tuple(p) for b, p in zip(self.bodies, self.positions[frame], strict=True)}
+        return World(self.scene, self.trajectory.meta["layout"], positions=positions)
+
+
+def arm_index(arm: str) -> int:
+    return ARMS.index(arm)
