@@ -40,7 +40,7 @@ def run_once(specs: Path) -> dict[str, float]:
     times["audit"] = time.perf_counter() - mark
     mark = time.perf_counter()
     with tempfile.TemporaryDirectory() as out:
-        write(Compiled(spec, splits, report), Path(out))
+        write(Compiled(spec, splits, report, training), Path(out))
     times["write outputs"] = time.perf_counter() - mark
     times["total"] = time.perf_counter() - started
     return times

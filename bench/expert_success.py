@@ -3,8 +3,9 @@
     python bench/expert_success.py [--specs specs] [--workers 2] [--levels L0,L1,L2,L3]
                                    [--scenes scene1,...] [--rounds N] [--json out.json]
 
-Prints the share of episodes whose behaviour was achieved per scene x level, and every
-failure with its cause. Targets: >= 99% overall and no cell below 97%.
+Each recording is scored by the oracle. Prints the share of episodes with full marks (Intent
+1, Execution 1 and complete) per scene x level, and every other episode with the stages it lost.
+Targets: >= 99% overall and no cell below 97%.
 """
 
 from __future__ import annotations
@@ -37,8 +38,10 @@ def _run(episode: dict) -> dict:
         result = run_expert(_SCENES[episode["scene"]], episode).summary()
     except Exception as error:  # a crash is a failure with its cause, not a lost episode
         result = {"episode": episode["episode"], "achieved": False, "steps": 0, "seconds": 0.0,
+                  "intent_score": 0.0, "execution_score": 0.0,
                   "reasons": [f"{type(error).__name__}: {error}"]}
-    return dict(result, scene=episode["scene"], level=episode["level"])
+    full = result["achieved"] and min(result["intent_score"], result["execution_score"]) >= 0.99
+    return dict(result, full=full, scene=episode["scene"], level=episode["level"])
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -62,8 +65,8 @@ def main(argv: list[str] | None = None) -> int:
     wall = time.perf_counter() - began
     cells: dict[tuple[str, str], list[bool]] = defaultdict(list)
     for result in results:
-        cells[result["scene"], result["level"]].append(result["achieved"])
-    print(f"\nexpert achieved (% of episodes), {len(results)} episodes, {args.workers} workers, "
+        cells[result["scene"], result["level"]].append(result["full"])
+    print(f"\nexpert scored in full (% of episodes), {len(results)} episodes, {args.workers} workers, "
           f"{wall / 60:.1f} min wall, {sum(r['seconds'] for r in results) / len(results):.2f} s "
           "per episode in a worker")
     print(f"{'':10}" + "".join(f"{level:>16}" for level in levels))
@@ -74,11 +77,15 @@ def main(argv: list[str] | None = None) -> int:
             row.append(f"{100 * sum(done) / len(done):6.1f} ({sum(done):4}/{len(done):4})"
                        if done else f"{'-':>16}")
         print(f"{scene:<10}" + "".join(f"{cell:>16}" for cell in row))
-    total = sum(r["achieved"] for r in results)
+    total = sum(r["full"] for r in results)
     worst = min(100 * sum(v) / len(v) for v in cells.values())
     print(f"overall {100 * total / len(results):.2f}% ({total}/{len(results)}); "
           f"lowest cell {worst:.1f}%")
-    failures = sorted((r for r in results if not r["achieved"]), key=lambda r: r["episode"])
+    means = {k: sum(r[k] for r in results) / len(results)
+             for k in ("intent_score", "execution_score", "achieved")}
+    print(f"mean Intent {means['intent_score']:.4f}, mean Execution "
+          f"{means['execution_score']:.4f}, complete {100 * means['achieved']:.2f}%")
+    failures = sorted((r for r in results if not r["full"]), key=lambda r: r["episode"])
     print(f"\nfailures: {len(failures) or 'none'}")
     for failure in failures:
         print(f"  {failure['episode']}: {'; '.join(failure['reasons'])}")

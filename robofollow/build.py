@@ -18,6 +18,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from robofollow.compiler import lf
+from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.goals import goal_graph, graph_to_dict
 from robofollow.compiler.plans import plan
 from robofollow.compiler.spec import LEVELS, Spec
@@ -34,6 +35,11 @@ class Compiled:
     spec: Spec
     splits: Splits
     report: dict
+    training: dict[str, Behaviour]  # every training task's behaviour, by label
+
+    def candidates(self, scene: str) -> dict[str, Behaviour]:
+        """The scene's training behaviours by label: what 'did instead' is matched against."""
+        return {t.label: self.training[t.label] for t in self.spec.scenes[scene].tasks}
 
 
 def compile_specs(specs: Path | list[Path]) -> Compiled:
@@ -58,7 +64,7 @@ def _compile(specs: Path | list[Path]) -> Compiled:
     spec = load_spec(specs)
     training = check_training(spec)
     splits = generate(spec, training)
-    return Compiled(spec, splits, audit(spec, training, splits))
+    return Compiled(spec, splits, audit(spec, training, splits), training)
 
 
 def _line(record: dict) -> str:

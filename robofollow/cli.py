@@ -120,9 +120,11 @@ def cmd_expert(args) -> int:
     else:
         verdict = "achieved" if result.achieved else "NOT achieved"
         print(f"{episode['episode']}: {verdict} in {result.steps} control steps "
-              f"({result.steps / CONTROL_HZ:.1f} s simulated, {result.seconds:.2f} s wall)")
+              f"({result.steps / CONTROL_HZ:.1f} s simulated, {result.seconds:.2f} s wall), "
+              f"Intent {result.score.intent_score:.2f}, Execution "
+              f"{result.score.execution_score:.2f}")
         print(f"  instruction: {episode['instruction']}")
-        for reason in result.reasons:
+        for reason in result.score.failures:
             print(f"  - {reason}")
         for label, path in (("video", args.video), ("trajectory", args.trajectory)):
             if path:
@@ -193,8 +195,8 @@ def build_parser() -> argparse.ArgumentParser:
     p = commands.add_parser(
         "expert", help="run the scripted expert on one compiled episode in MuJoCo",
         description="Reset the episode's layout with its seed, execute the expert's compiled "
-                    "plan, and check the behaviour's end state geometrically. Exit status 1 "
-                    "when the behaviour was not achieved.",
+                    "plan, and score the recording with the oracle. Exit status 1 when the "
+                    "oracle does not score the episode complete.",
         epilog="example:\n  robofollow expert --episode 'scene2/L0/pickup_left_cube#r1' "
                "--video out.mp4", formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--episode", required=True, metavar="ID",
@@ -207,7 +209,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--image-size", type=_size, default=(320, 240), metavar="WxH",
                    help="camera image size for --video (default: 320x240)")
     p.add_argument("--json", action="store_true",
-                   help="print one JSON object: episode, achieved, reasons, steps, seconds")
+                   help="print one JSON object: episode, achieved, intent_score, "
+                        "execution_score, reasons, steps, seconds")
     p.set_defaults(handler=cmd_expert)
 
     p = commands.add_parser(

@@ -14,7 +14,7 @@ from robofollow.sim.env import RoboFollowEnv
 from robofollow.sim.expert import Expert
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.plans import plan
-from robofollow.oracle.end_state import achieved
+from robofollow.oracle.score import score
 from tests.sim_helpers import benchmark
 
 
@@ -73,8 +73,9 @@ def test_expert_actions_through_the_env_achieve_the_behaviour(env):
         obs, reward, terminated, truncated, info = env.step(action.astype(np.float32))
         assert reward == 0.0 and not terminated
     assert info["step"] == len(actions)
-    ok, reasons = achieved(behaviour, env.trajectory(), env.sim.scene)
-    assert ok, reasons
+    result = score(behaviour, env.trajectory(), env.sim.scene)
+    assert result.complete and result.intent_score == result.execution_score == 1.0, \
+        result.failures
     np.testing.assert_allclose(obs["state"][:6], actions[-1][:6], atol=0.03)
 
 

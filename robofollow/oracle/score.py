@@ -10,6 +10,7 @@ stage but the finish executed in full.
 
 from __future__ import annotations
 
+import itertools
 from functools import lru_cache
 
 from robofollow.compiler.behaviour import Behaviour
@@ -139,22 +140,24 @@ def _reverse_order(rec: Recording, behaviour: Behaviour) -> str | None:
         source = rec.index(step.source)
         frames = [g.frame for g in rec.grasps(arm_index(step.arm)) if g.body == source]
         starts.append((step.source, frames[0] if frames else None))
-    for (earlier, a), (later, b) in zip(starts, starts[1:]):
+    for (earlier, a), (later, b) in itertools.pairwise(starts):
         if b is not None and (a is None or b < a):
             return f"out of order: {later} was taken before {earlier}"
     return None
 
 
 def _closest(rec: Recording, options: list[tuple[str, Behaviour]]) -> ExecutedBehaviour:
-    """The option the trajectory scores best against (ties: earlier options first)."""
-    best, best_total, best_scores = None, 0.0, (0.0, 0.0)
+    """The option the trajectory scores best against; on a tie the more specific one (more
+    stages), then the earlier one."""
+    best, best_key, best_scores = None, (1e-9, 0), (0.0, 0.0)
     for name, behaviour in options:
         if not _bodies(behaviour) <= set(rec.bodies):  # made for another layout
             continue
         stages = evaluate(rec, behaviour)
         scores = (_total(stages, "intent"), _total(stages, "execution"))
-        if sum(scores) > best_total + 1e-9:
-            best, best_total, best_scores = (name, behaviour), sum(scores), scores
+        key = (round(sum(scores), 6), len(stages))
+        if key > best_key:
+            best, best_key, best_scores = (name, behaviour), key, scores
     return ExecutedBehaviour(description=describe_actions(rec), match=best and best[0],
                              behaviour=best and describe(best[1]),
                              intent_score=best_scores[0], execution_score=best_scores[1])

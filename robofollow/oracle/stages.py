@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robofollow.compiler.splits import passes_over
 from robofollow.compiler.behaviour import Step
+from robofollow.compiler.splits import passes_over
 from robofollow.compiler.world import DIRECTIONS
 from robofollow.oracle import predicates as P
 from robofollow.oracle.recording import Recording, arm_index

@@ -26,7 +26,7 @@ TURN_SPEED = 1.5  # rad/s: average gripper rotation speed
 JOINT_SPEED = 1.0  # rad/s: average speed of the largest joint on joint-space moves
 GRIPPER_STEPS = 10  # control steps to open or close the gripper
 DWELL_STEPS = 2  # control steps held at the end of every move
-FINAL_STEPS = 10  # control steps held after the last point
+FINAL_STEPS = 20  # control steps held after the last point (the finish stage checks 20)
 REACH_SEED = (-0.2, 0.6, 0.0, 1.2, 0.0)  # rad: shoulder .. wrist_rotate, gripper pointing down
 
 
