@@ -132,6 +132,28 @@ def cmd_expert(args) -> int:
     return 0 if result.achieved else 1
 
 
+def cmd_score(args) -> int:
+    from robofollow.build import compile_specs, find_episode
+    from robofollow.scoring import score_recording
+    from robofollow.trajectory import Trajectory
+
+    trajectory = Trajectory.load(args.trajectory)
+    episode_id = args.episode or trajectory.meta.get("episode")
+    if not episode_id:
+        raise RoboFollowError(f"{args.trajectory} does not say which episode it records; "
+                              "pass --episode ID")
+    compiled = compile_specs(Path(args.specs))
+    record = find_episode(compiled, episode_id)
+    result = score_recording(compiled, record, trajectory)
+    if args.json:
+        print(result.model_dump_json(indent=1))
+    else:
+        print(f"{record['episode']}  ({len(trajectory)} frames)")
+        print(f"instruction: {record['instruction']}\n")
+        print(result.table())
+    return 0
+
+
 def cmd_render(args) -> int:
     from robofollow.build import compile_specs
     from robofollow.sim.picture import layout_picture
@@ -191,6 +213,23 @@ def build_parser() -> argparse.ArgumentParser:
                    help="a spec file or a folder of .rf files (default: specs)")
     p.add_argument("--json", action="store_true", help="print the audit as one JSON object")
     p.set_defaults(handler=cmd_audit)
+
+    p = commands.add_parser(
+        "score", help="score a recorded trajectory stage by stage (Intent, Execution)",
+        description="Score a saved trajectory (.npz, e.g. from `robofollow expert "
+                    "--trajectory`) against a compiled episode: each stage's Intent and "
+                    "Execution with the reason, the totals, completion, and what the arms did "
+                    "instead. docs/scoring.md explains every stage and threshold.",
+        epilog="example:\n  robofollow expert --episode 'scene2/L0/pickup_left_cube#r1' "
+               "--trajectory t.npz\n  robofollow score t.npz --episode "
+               "'scene2/L0/pickup_right_cube#r1'",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("trajectory", metavar="TRAJECTORY_FILE", help="a saved trajectory (.npz)")
+    p.add_argument("--episode", metavar="ID",
+                   help="episode id to score against (default: the one the file records)")
+    p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
+    p.add_argument("--json", action="store_true", help="print the EpisodeScore as JSON")
+    p.set_defaults(handler=cmd_score)
 
     p = commands.add_parser(
         "expert", help="run the scripted expert on one compiled episode in MuJoCo",

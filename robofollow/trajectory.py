@@ -7,10 +7,13 @@ One frame per control step (frame 0 is the settled start). `bodies` are the layo
 from __future__ import annotations
 
 import json
+import zipfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from robofollow.errors import RoboFollowError
 
 ARMS = ("left", "right")
 CONTACT_EXTRAS = ("table", "left_gripper", "right_gripper")
@@ -53,14 +56,44 @@ class Trajectory:
 
     @classmethod
     def load(cls, path: str | Path) -> "Trajectory":
-        with np.load(path, allow_pickle=False) as data:
-            return cls(bodies=tuple(str(b) for b in data["bodies"]),
-                       meta=json.loads(str(data["meta"])),
-                       **{name: data[name] for name in _ARRAYS})
+        """Read a saved trajectory; TrajectoryError says what is wrong with a bad file."""
+        if Path(path).is_file() and not zipfile.is_zipfile(path):
+            raise TrajectoryError(f"{path}: not a .npz trajectory (not a zip archive)")
+        try:
+            with np.load(path, allow_pickle=False) as data:
+                missing = [k for k in ("bodies", "meta", *_ARRAYS) if k not in data.files]
+                if missing:
+                    raise TrajectoryError(f"{path}: not a RoboFollow trajectory (missing "
+                                          f"{', '.join(missing)})")
+                trajectory = cls(bodies=tuple(str(b) for b in data["bodies"]),
+                                 meta=json.loads(str(data["meta"])),
+                                 **{name: data[name] for name in _ARRAYS})
+        except (OSError, ValueError, zipfile.BadZipFile) as error:
+            raise TrajectoryError(f"{path}: cannot read a trajectory ({error})") from None
+        trajectory.check(path)
+        return trajectory
+
+    def check(self, where: str | Path = "trajectory") -> None:
+        """Raise TrajectoryError unless every array has one row per frame and the right
+        shape for the bodies."""
+        frames, bodies = len(self.time), len(self.bodies)
+        shapes = {"state": (frames, 14), "action": (frames, 14), "positions": (frames, bodies, 3),
+                  "quaternions": (frames, bodies, 4), "ee_positions": (frames, 2, 3),
+                  "ee_quaternions": (frames, 2, 4), "grasped": (frames, 2)}
+        for name, shape in shapes.items():
+            if getattr(self, name).shape != shape:
+                raise TrajectoryError(f"{where}: {name} has shape {getattr(self, name).shape}, "
+                                      f"expected {shape} ({frames} frames, {bodies} bodies)")
+        if frames == 0:
+            raise TrajectoryError(f"{where}: the trajectory has no frames")
 
 
 _ARRAYS = ("movable", "time", "state", "action", "positions", "quaternions", "ee_positions",
            "ee_quaternions", "grasped", "contacts")
+
+
+class TrajectoryError(RoboFollowError):
+    """A trajectory file that cannot be read or does not hold a whole trajectory."""
 
 
 def yaw(quaternion: np.ndarray) -> np.ndarray:

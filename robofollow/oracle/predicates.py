@@ -89,9 +89,10 @@ def progress(displacement: np.ndarray, direction: np.ndarray, cone_deg: float) -
 def crossings(path: np.ndarray, x: float, near: float) -> tuple[np.ndarray, np.ndarray]:
     """Where a planar path (T, 2) comes within `near` (m) of the line at `x`, or crosses it
     between two frames: (frames, the path's y there, interpolated at crossings)."""
-    close = np.flatnonzero(np.abs(path[:, 0] - x) < near)
+    near_line = np.abs(path[:, 0] - x) < near
+    close = np.flatnonzero(near_line)
     side = np.sign(path[:, 0] - x)
-    between = np.flatnonzero(side[:-1] * side[1:] < 0)
+    between = np.flatnonzero((side[:-1] * side[1:] < 0) & ~near_line[:-1] & ~near_line[1:])
     a, b = path[between], path[between + 1]
     t = (x - a[:, 0]) / (b[:, 0] - a[:, 0])
     frames = np.concatenate((close, between))

@@ -40,3 +40,24 @@ class EpisodeScore(Model):
         """One line per stage that did not earn full credit."""
         return [f"{s.stage}: {s.reason}" for s in self.stages
                 if s.intent < s.weight or s.execution < s.weight]
+
+    def table(self) -> str:
+        """The stage table, the totals and what the arms did, for people."""
+        lines = [f"{'stage':<16}{'weight':>7}{'intent':>8}{'exec':>6}{'frame':>7}  reason"]
+        for s in self.stages:
+            frame = "-" if s.first_step is None else str(s.first_step)
+            lines.append(f"{s.stage:<16}{s.weight:>7.2f}{s.intent:>8.2f}{s.execution:>6.2f}"
+                         f"{frame:>7}  {s.reason}")
+        weight = sum(s.weight for s in self.stages)
+        lines.append(f"{'total':<16}{weight:>7.2f}{self.intent_score:>8.2f}"
+                     f"{self.execution_score:>6.2f}   complete: {'yes' if self.complete else 'no'}")
+        if self.other_branch:
+            lines.append("the branch the condition does not select was carried out")
+        did = self.executed_behaviour
+        if did is not None:
+            lines.append(f"did: {did.description}")
+            if did.match is not None:
+                lines.append(f"closest behaviour: {did.match} ({did.behaviour}; Intent "
+                             f"{did.intent_score:.2f}, Execution {did.execution_score:.2f})")
+        lines.append(f"profile: {self.profile.get('name', '?')}")
+        return "\n".join(lines)

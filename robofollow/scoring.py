@@ -1,0 +1,34 @@
+"""Scoring a recorded trajectory as one compiled episode: check that it was recorded in the
+episode's layout, then score it with the scene's training behaviours as 'did instead'
+candidates."""
+
+from __future__ import annotations
+
+from robofollow.build import Compiled
+from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
+from robofollow.errors import RoboFollowError
+from robofollow.oracle.results import EpisodeScore
+from robofollow.oracle.score import score
+from robofollow.trajectory import Trajectory
+
+
+class RecordingMismatchError(RoboFollowError):
+    """A trajectory that was not recorded in the episode's scene layout."""
+
+
+def score_recording(compiled: Compiled, record: dict, trajectory: Trajectory,
+                    profile: ScoringProfile = DEFAULT_PROFILE) -> EpisodeScore:
+    scene = compiled.spec.scenes[record["scene"]]
+    layout = trajectory.meta.get("layout")
+    if layout is not None and layout != record["layout"]:
+        raise RecordingMismatchError(f"the trajectory was recorded in layout {layout!r}, but "
+                                     f"{record['episode']} uses layout {record['layout']!r}")
+    expected = set(scene.layouts[record["layout"]].placed)
+    if set(trajectory.bodies) != expected:
+        raise RecordingMismatchError(
+            f"the trajectory's bodies ({', '.join(sorted(trajectory.bodies))}) are not those "
+            f"of {record['scene']} layout {record['layout']} ({', '.join(sorted(expected))})")
+    trajectory.meta.setdefault("layout", record["layout"])
+    return score(Behaviour.model_validate(record["behaviour"]), trajectory, scene, profile,
+                 episode=record["episode"], candidates=compiled.candidates(record["scene"]))

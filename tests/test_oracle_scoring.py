@@ -1,0 +1,166 @@
+"""Scoring rules on edited expert recordings: grasp attempts, the finish stage's clauses, the
+profile, the recording checks, the metrics, and `robofollow score`."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
+from robofollow.oracle import predicates as P
+from robofollow.oracle.metrics import table
+from robofollow.oracle.score import score
+from robofollow.resources import builtin_specs
+from robofollow.scoring import RecordingMismatchError, score_recording
+from robofollow.sim.rollout import run_expert
+from robofollow.trajectory import Trajectory, TrajectoryError
+from tests.sim_helpers import benchmark, episode
+from tests.test_cli import run
+
+PLACE = "scene1/L0/place_yellow_block_1_behind_red_cylinder#r1"  # right arm
+FRAME_ARRAYS = ("time", "state", "action", "positions", "quaternions", "ee_positions",
+                "ee_quaternions", "grasped", "contacts")
+
+
+@pytest.fixture(scope="module")
+def expert() -> Trajectory:
+    record = episode(PLACE)
+    return run_expert(benchmark().spec.scenes["scene1"], record).trajectory
+
+
+def scored(trajectory: Trajectory, profile: ScoringProfile = DEFAULT_PROFILE):
+    record = episode(PLACE)
+    return score(Behaviour.model_validate(record["behaviour"]), trajectory,
+                 benchmark().spec.scenes["scene1"], profile)
+
+
+def edited(trajectory: Trajectory, **arrays) -> Trajectory:
+    return dataclasses.replace(trajectory, **arrays)
+
+
+def held(trajectory: Trajectory, frame: int, count: int) -> Trajectory:
+    """The recording with frame `frame` repeated `count` more times (a pause)."""
+    index = np.concatenate([np.arange(frame + 1), np.full(count, frame),
+                            np.arange(frame + 1, len(trajectory))])
+    return edited(trajectory, **{k: getattr(trajectory, k)[index] for k in FRAME_ARRAYS})
+
+
+def release_frame(trajectory: Trajectory) -> int:
+    return int(P.rises(trajectory.action[:, 13], DEFAULT_PROFILE.open_threshold)[0])
+
+
+def test_the_expert_recording_scores_in_full(expert):
+    result = scored(expert)
+    assert (result.intent_score, result.execution_score, result.complete) == (1.0, 1.0, True)
+    assert result.profile == DEFAULT_PROFILE.model_dump(mode="json")
+
+
+def test_closing_in_free_air_is_not_a_grasp_attempt(expert):
+    action = expert.action.copy()
+    action[3:8, 13] = 0.0  # the right gripper closes and opens at home, far from any object
+    assert scored(edited(expert, action=action)).intent_score == 1.0
+
+
+def test_a_grasp_attempt_on_the_wrong_object_loses_everything(expert):
+    index = expert.index("yellow_block_1")
+    positions = expert.positions.copy()
+    other = expert.index("yellow_block_2")
+    positions[:, [index, other]] = positions[:, [other, index]]  # the blocks trade places
+    result = scored(edited(expert, positions=positions))
+    assert result.intent_score == 0.0
+    assert "first closed on yellow_block_2" in result.stages[0].reason
+
+
+def test_the_finish_deadline(expert):
+    frame = release_frame(expert)
+    late = scored(held(expert, frame + 5, 200))  # pauses 200 frames before going home
+    assert late.stages[-1].intent == 0.0 and "frames after finishing" in late.stages[-1].reason
+    assert late.intent_score == pytest.approx(0.8) and late.complete
+    assert scored(held(expert, frame + 5, 100)).intent_score == 1.0  # within 180 frames
+
+
+def test_the_idle_arm_must_keep_out_of_the_work_area(expert):
+    ee = expert.ee_positions.copy()
+    ee[40:45, 0] = [0.0, 0.0, 0.85]  # the left (idle) arm over the table centre
+    result = scored(edited(expert, ee_positions=ee))
+    assert "idle left arm entered the work area at frame 40" in result.stages[-1].reason
+    assert [s.intent for s in result.stages] == [0.4, 0.4, 0.0]
+
+
+def test_closing_again_after_finishing_loses_the_finish(expert):
+    action = expert.action.copy()
+    action[-3:, 13] = 0.0
+    result = scored(edited(expert, action=action))
+    assert "closed its gripper again" in result.stages[-1].reason
+    assert result.execution_score == pytest.approx(0.8)
+
+
+def test_a_profile_changes_the_thresholds_and_is_recorded(expert):
+    strict = ScoringProfile(name="strict", relation_range=0.05)
+    result = scored(expert, strict)
+    assert result.profile["name"] == "strict" and result.profile["relation_range"] == 0.05
+    assert result.stages[1].intent == 0.0 and "never got behind red_cylinder" in \
+        result.stages[1].reason
+
+
+def test_a_recording_from_another_layout_is_refused(expert):
+    compiled = benchmark()
+    scene4 = episode("scene4/L0/s41_l_pick_cube_in_bowl#r1")
+    relabelled = dataclasses.replace(expert, meta=dict(expert.meta, layout="scene4_1"))
+    with pytest.raises(RecordingMismatchError, match="bodies"):
+        score_recording(compiled, scene4, relabelled)
+    moved = dataclasses.replace(expert, meta=dict(expert.meta, layout="scene1_1"))
+    with pytest.raises(RecordingMismatchError, match="layout 'scene1_1'"):
+        score_recording(compiled, episode(PLACE), moved)
+
+
+def test_bad_trajectory_files_say_what_is_wrong(tmp_path, expert):
+    (tmp_path / "text.npz").write_text("not an archive")
+    with pytest.raises(TrajectoryError, match="not a zip archive"):
+        Trajectory.load(tmp_path / "text.npz")
+    np.savez(tmp_path / "other.npz", x=np.zeros(3))
+    with pytest.raises(TrajectoryError, match="missing bodies"):
+        Trajectory.load(tmp_path / "other.npz")
+    short = edited(expert, state=expert.state[:-1])
+    short.save(tmp_path / "short.npz")
+    with pytest.raises(TrajectoryError, match="state has shape"):
+        Trajectory.load(tmp_path / "short.npz")
+
+
+def test_metrics_follow_the_paper():
+    rows = [("s1", "L0", "a", 1.0, 1.0, True), ("s1", "L0", "a", 0.4, 0.0, False),
+            ("s1", "L0", "b", 0.0, 0.0, False), ("s1", "L1", "a", 1.0, 0.6, True),
+            ("s2", "L0", "c", 0.8, 0.8, True)]
+    results = [dict(zip(("scene", "level", "task", "intent_score", "execution_score",
+                         "complete"), row, strict=True)) for row in rows]
+    got = table(results)
+    cell = got["cells"]["s1"]["L0"]
+    assert cell["IS"] == pytest.approx(46.67) and cell["ES"] == pytest.approx(33.33)
+    assert cell["CR"] == 25.0  # task a: 1/2, task b: 0/1 -> mean 25, not 1/3 of episodes
+    assert cell["CR_micro"] == pytest.approx(33.33) and cell["episodes"] == 3
+    assert got["avg"]["IS"] == pytest.approx((46.67 + 100 + 80) / 3, abs=0.01)
+    assert got["avg"]["CR"] == pytest.approx((25 + 100 + 100) / 3, abs=0.01)
+
+
+def test_the_score_command(tmp_path, expert, capsys):
+    path = tmp_path / "t.npz"
+    expert.save(path)
+    specs = str(builtin_specs())
+    status, out, _ = run(capsys, "score", str(path), "--specs", specs)
+    assert status == 0 and "complete: yes" in out and "closest behaviour: instructed" in out
+    other = "scene1/L0/place_yellow_block_1_beside_red_cylinder#r1"
+    status, out, _ = run(capsys, "score", str(path), "--episode", other, "--json", "--specs",
+                         specs)
+    result = json.loads(out)
+    assert status == 0 and result["intent_score"] == pytest.approx(0.4)
+    assert result["executed_behaviour"]["match"] == "place_yellow_block_1_behind_red_cylinder"
+    status, _, err = run(capsys, "score", str(tmp_path / "missing.npz"))
+    assert status == 1 and "cannot read a trajectory" in err and "Traceback" not in err
+    anonymous = dataclasses.replace(expert, meta={"layout": "default"})
+    anonymous.save(tmp_path / "anonymous.npz")
+    status, _, err = run(capsys, "score", str(tmp_path / "anonymous.npz"), "--specs", specs)
+    assert status == 1 and "pass --episode" in err
