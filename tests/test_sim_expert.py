@@ -35,10 +35,11 @@ KINDS = [
 
 
 @pytest.mark.parametrize("episode_id", KINDS)
-def test_the_expert_achieves_every_kind_of_behaviour(episode_id):
+def test_the_expert_scores_in_full_on_every_kind_of_behaviour(episode_id):
     record = episode(episode_id)
     result = run_expert(benchmark().spec.scenes[record["scene"]], record)
     assert result.achieved, result.score.failures
+    assert result.score.intent_score == result.score.execution_score == 1.0
     trajectory = result.trajectory
     assert len(trajectory) == result.steps + 1
     actions = trajectory.action

@@ -43,6 +43,7 @@ class Recording:
         self.last = len(trajectory) - 1
         self._events: dict[tuple, np.ndarray] = {}
         self._grasps: dict[int, list[Grasp]] = {}
+        self.memo: dict = {}  # per-recording results: stage outcomes, supports
 
     def index(self, body: str) -> int:
         return self.bodies.index(body)
@@ -89,6 +90,12 @@ class Recording:
 
     def support_of(self, body: int, frame: int) -> int | None:
         """The body directly under `body` at this frame, if it rests on one."""
+        key = ("support", body, frame)
+        if key not in self.memo:
+            self.memo[key] = self._support_of(body, frame)
+        return self.memo[key]
+
+    def _support_of(self, body: int, frame: int) -> int | None:
         p = self.profile
         offset = np.linalg.norm(self.xy[frame] - self.xy[frame, body], axis=1)
         drop = self.z[frame, body] - self.z[frame]

@@ -11,6 +11,7 @@ stage but the finish executed in full.
 from __future__ import annotations
 
 import itertools
+import json
 from functools import lru_cache
 
 from robofollow.compiler.behaviour import Behaviour
@@ -28,9 +29,12 @@ FULL = 0.99  # a score at least this share of its maximum counts as full credit
 
 
 @lru_cache(maxsize=4096)
-def _nodes(behaviour: Behaviour, profile: ScoringProfile) -> tuple[tuple[str, dict], ...]:
+def _nodes(behaviour: Behaviour, profile: ScoringProfile) -> tuple[tuple[str, dict, str], ...]:
+    """The goal DAG's nodes in scoring order, each with a key naming what it checks (equal
+    keys in different behaviours evaluate alike, so a recording evaluates them once)."""
     graph = goal_graph(behaviour, profile)
-    return tuple((n, graph.nodes[n]) for n in stage_order(graph))
+    return tuple((n, graph.nodes[n], json.dumps([graph.nodes[n][k] for k in (
+        "name", "arm", "intent", "execution")], sort_keys=True)) for n in stage_order(graph))
 
 
 def score(behaviour: Behaviour, trajectory: Trajectory, scene: Scene,
@@ -73,7 +77,7 @@ def evaluate(rec: Recording, behaviour: Behaviour) -> list[StageResult]:
     marks: dict[str, dict] = {}
     reversed_steps = _reverse_order(rec, behaviour)
     results, blocked_intent, blocked_execution = [], None, None
-    for node_id, node in nodes:
+    for node_id, node, key in nodes:
         step = node_id.rpartition(".")[0]
         mark = marks.setdefault(step, {})
         if reversed_steps:
@@ -82,7 +86,7 @@ def evaluate(rec: Recording, behaviour: Behaviour) -> list[StageResult]:
             outcome = Outcome(False, False, None, f"not scored: {blocked_intent} not met")
         else:
             _prepare(node, mark, marks, step, behaviour)
-            outcome = EVALUATORS[node["intent"]["predicate"]](rec, node, mark)
+            outcome = _evaluate_node(rec, node, key, mark)
             if node["stage"] == 1 and len(behaviour.steps) == 1:
                 outcome = _first_arm(rec, node, outcome)
         intent = outcome.intent and not blocked_intent
@@ -98,6 +102,17 @@ def evaluate(rec: Recording, behaviour: Behaviour) -> list[StageResult]:
         blocked_intent = blocked_intent or (None if intent else node_id)
         blocked_execution = blocked_execution or (None if execution else node_id)
     return results
+
+
+def _evaluate_node(rec: Recording, node: dict, key: str, mark: dict) -> Outcome:
+    """One stage's outcome, computed once per recording for the same check and start marks."""
+    memo_key = (key, tuple(sorted(mark.items())))
+    if memo_key not in rec.memo:
+        outcome = EVALUATORS[node["intent"]["predicate"]](rec, node, mark)
+        rec.memo[memo_key] = (outcome, dict(mark))
+    outcome, after = rec.memo[memo_key]
+    mark.update(after)
+    return outcome
 
 
 def _prepare(node: dict, mark: dict, marks: dict, step: str, behaviour: Behaviour) -> None:
@@ -150,9 +165,11 @@ def _closest(rec: Recording, options: list[tuple[str, Behaviour]]) -> ExecutedBe
     """The option the trajectory scores best against; on a tie the more specific one (more
     stages), then the earlier one."""
     best, best_key, best_scores = None, (1e-9, 0), (0.0, 0.0)
+    seen = set()
     for name, behaviour in options:
-        if not _bodies(behaviour) <= set(rec.bodies):  # made for another layout
-            continue
+        if behaviour.steps in seen or not _bodies(behaviour) <= set(rec.bodies):
+            continue  # already matched under another name, or made for another layout
+        seen.add(behaviour.steps)
         stages = evaluate(rec, behaviour)
         scores = (_total(stages, "intent"), _total(stages, "execution"))
         key = (round(sum(scores), 6), len(stages))

@@ -1,0 +1,82 @@
+"""Scoring speed: one 500-frame trajectory per action kind, scored by the oracle.
+
+    python bench/oracle_bench.py [--repeats 200] [--frames 500]
+
+For each kind, an expert recording is padded to `--frames` frames (the arms hold still at the
+end) and scored `--repeats` times: with the instructed behaviour only, and with the scene's
+training behaviours as 'did instead' candidates (as `robofollow score` and evaluation do).
+Prints the median time per trajectory and frames per second. Target: < 5 ms per 500 frames.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import statistics
+import time
+from pathlib import Path
+
+import robofollow  # noqa: F401  (before MuJoCo: headless GL default)
+from robofollow.build import compile_specs, find_episode
+from robofollow.compiler.behaviour import Behaviour
+from robofollow.oracle.score import score
+from robofollow.sim.rollout import run_expert
+
+ROOT = Path(__file__).resolve().parent.parent
+KINDS = ["scene1/L0/pickup_yellow_block_2#r1",
+         "scene1/L0/place_yellow_block_1_behind_red_cylinder#r1",
+         "scene2/L0/push_left_cube_to_red_cylinder#r1",
+         "scene2/L0/stack_left_cube_on_red_cylinder#r1",
+         "scene2/L0/place_right_cube_in_green_bowl#r1",
+         "scene3/L0/l_pick5_around2_to1_short_right#r1",
+         "scene4/L0/s41_seq_l_bowl_then_r_green_cylinder#r1",
+         "scene4/L0/s41_if_bowl_nonempty_then_l_pick_blue_else_r_stack#r1"]
+FRAME_ARRAYS = ("time", "state", "action", "positions", "quaternions", "ee_positions",
+                "ee_quaternions", "grasped", "contacts")
+
+
+def padded(trajectory, frames: int):
+    index = [min(i, len(trajectory) - 1) for i in range(frames)]
+    return dataclasses.replace(trajectory, **{k: getattr(trajectory, k)[index]
+                                              for k in FRAME_ARRAYS})
+
+
+def median_ms(call, repeats: int) -> float:
+    times = []
+    for _ in range(repeats):
+        began = time.perf_counter()
+        call()
+        times.append(time.perf_counter() - began)
+    return 1000 * statistics.median(times)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeats", type=int, default=200)
+    parser.add_argument("--frames", type=int, default=500)
+    args = parser.parse_args()
+    compiled = compile_specs(ROOT / "specs")
+    print(f"{'episode':<68}{'alone ms':>9}{'+ did-instead ms':>18}{'frames/s':>11}")
+    alone_all, full_all = [], []
+    for episode_id in KINDS:
+        record = find_episode(compiled, episode_id)
+        scene = compiled.spec.scenes[record["scene"]]
+        trajectory = padded(run_expert(scene, record).trajectory, args.frames)
+        behaviour = Behaviour.model_validate(record["behaviour"])
+        candidates = compiled.candidates(record["scene"])
+        result = score(behaviour, trajectory, scene, candidates=candidates)
+        assert result.complete and result.intent_score == 1.0, (episode_id, result.failures)
+        alone = median_ms(lambda: score(behaviour, trajectory, scene), args.repeats)
+        full = median_ms(lambda: score(behaviour, trajectory, scene, candidates=candidates),
+                         args.repeats)
+        alone_all.append(alone)
+        full_all.append(full)
+        print(f"{episode_id:<68}{alone:>9.2f}{full:>18.2f}{args.frames / full * 1000:>11.0f}")
+    print(f"median over kinds: {statistics.median(alone_all):.2f} ms alone, "
+          f"{statistics.median(full_all):.2f} ms with did-instead matching "
+          f"({len(candidates)} candidates in the last scene); worst "
+          f"{max(full_all):.2f} ms (target < 5 ms per {args.frames}-frame trajectory)")
+
+
+if __name__ == "__main__":
+    main()
