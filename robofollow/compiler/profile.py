@@ -41,8 +41,6 @@ class ScoringProfile(Model):
     bowl_height: float = 0.06  # m: and below this height over the bowl
     push_min_intent: float = 0.01  # m: displacement towards the target for intent
     push_min_execution: float = 0.02  # m: and for execution
-    slot_xy: float = 0.05  # m: placed at a position
-    slot_z: float = 0.05  # m
     route_x: float = 0.01  # m: carried object over a waypoint, across the path
     route_y: float = 0.06  # m: along the path
     route_clear_y: float = 0.04  # m: away from the other object of the column

@@ -192,7 +192,7 @@ def route(rec: Recording, node: dict, marks: dict) -> Outcome:
     lifted = rec.rise(source, marks["grasp"]) >= rec.profile.min_lift
     lifted[:marks["grasp"]] = False
     path = rec.xy[:, source]
-    start = rec.world(0)
+    start, crossed, met = rec.world(0), [], marks["grasp"]
     for mode, body in p["waypoints"]:
         step = Step(action="place", arm=None, source=p["object"], waypoints=((mode, body),))
         rights = passes_over(step, start)
@@ -201,6 +201,8 @@ def route(rec: Recording, node: dict, marks: dict) -> Outcome:
             frame = _crossed(rec, path, lifted, right, wrongs, p)
             if frame is None:
                 return Outcome(False, False, None, f"{p['object']} was not carried over {right}")
+            crossed.append(f"{right} at frame {frame}")
+            met = max(met, frame)
         if mode == "avoid":
             avoided = rec.index(body)
             over = P.over_footprint(path, rec.xy[:, avoided], rec.half[avoided, :2]) & lifted
@@ -208,8 +210,11 @@ def route(rec: Recording, node: dict, marks: dict) -> Outcome:
                 frame = int(np.flatnonzero(over)[0])
                 return Outcome(False, False, frame, f"{p['object']} passed over {body} at "
                                f"frame {frame}")
-    marks["objective"] = int(np.flatnonzero(lifted)[-1]) if lifted.any() else marks["grasp"]
-    return Outcome(True, True, marks["objective"], f"{p['object']} took the asked route")
+    marks["objective"] = met
+    avoided = [body for mode, body in p["waypoints"] if mode == "avoid"]
+    words = ([f"was carried over {', '.join(crossed)}"] if crossed else []) + \
+        ([f"never over {', '.join(avoided)}"] if avoided else [])
+    return Outcome(True, True, met, f"{p['object']} {' and '.join(words)}")
 
 
 def _crossed(rec: Recording, path: np.ndarray, lifted: np.ndarray, right: str,
