@@ -13,5 +13,10 @@ def benchmark() -> Compiled:
     return compile_specs(builtin_specs())
 
 
+@lru_cache(maxsize=1)
+def _episodes() -> dict[str, dict]:
+    return {e["episode"]: e for e in all_episodes(benchmark())}
+
+
 def episode(episode_id: str) -> dict:
-    return next(e for e in all_episodes(benchmark()) if e["episode"] == episode_id)
+    return _episodes()[episode_id]

@@ -4,10 +4,13 @@ profile, the recording checks, the metrics, and `robofollow score`."""
 from __future__ import annotations
 
 import dataclasses
+import functools
 import json
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
@@ -32,10 +35,13 @@ def expert() -> Trajectory:
     return run_expert(benchmark().spec.scenes["scene1"], record).trajectory
 
 
+@functools.cache
+def asked() -> Behaviour:
+    return Behaviour.model_validate(episode(PLACE)["behaviour"])
+
+
 def scored(trajectory: Trajectory, profile: ScoringProfile = DEFAULT_PROFILE):
-    record = episode(PLACE)
-    return score(Behaviour.model_validate(record["behaviour"]), trajectory,
-                 benchmark().spec.scenes["scene1"], profile)
+    return score(asked(), trajectory, benchmark().spec.scenes["scene1"], profile)
 
 
 def edited(trajectory: Trajectory, **arrays) -> Trajectory:
@@ -164,3 +170,27 @@ def test_the_score_command(tmp_path, expert, capsys):
     anonymous.save(tmp_path / "anonymous.npz")
     status, _, err = run(capsys, "score", str(tmp_path / "anonymous.npz"), "--specs", specs)
     assert status == 1 and "pass --episode" in err
+
+
+@given(data=st.data())
+def test_scores_stay_consistent_under_arbitrary_edits(expert, data):
+    """Whatever the recording: credits are all-or-nothing per stage, Execution never exceeds
+    Intent, gating holds, and scoring is deterministic."""
+    frames, bodies = len(expert), len(expert.bodies)
+    start = data.draw(st.integers(0, frames - 1))
+    stop = data.draw(st.integers(start + 1, frames))
+    action, positions, ee = expert.action.copy(), expert.positions.copy(), expert.ee_positions.copy()
+    action[start:stop, data.draw(st.sampled_from([6, 13]))] = data.draw(st.floats(0.0, 1.0))
+    shift = data.draw(st.lists(st.floats(-0.05, 0.05), min_size=3, max_size=3))
+    positions[start:, data.draw(st.integers(0, bodies - 1))] += shift
+    ee[start:stop, data.draw(st.integers(0, 1))] += shift
+    trajectory = edited(expert, action=action, positions=positions, ee_positions=ee)
+    result = scored(trajectory)
+    assert result == scored(trajectory)
+    assert 0.0 <= result.execution_score <= result.intent_score <= 1.0
+    for stage in result.stages:
+        assert stage.intent in (0.0, stage.weight) and stage.execution in (0.0, stage.intent)
+    intents = [s.intent > 0 for s in result.stages]
+    assert intents == sorted(intents, reverse=True)  # no credit after a missed stage
+    if result.complete:
+        assert all(s.execution == s.weight for s in result.stages if s.name != "finish")
