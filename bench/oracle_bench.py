@@ -14,6 +14,7 @@ import argparse
 import dataclasses
 import statistics
 import time
+from functools import partial
 from pathlib import Path
 
 import robofollow  # noqa: F401  (before MuJoCo: headless GL default)
@@ -66,8 +67,8 @@ def main() -> None:
         candidates = compiled.candidates(record["scene"])
         result = score(behaviour, trajectory, scene, candidates=candidates)
         assert result.complete and result.intent_score == 1.0, (episode_id, result.failures)
-        alone = median_ms(lambda: score(behaviour, trajectory, scene), args.repeats)
-        full = median_ms(lambda: score(behaviour, trajectory, scene, candidates=candidates),
+        alone = median_ms(partial(score, behaviour, trajectory, scene), args.repeats)
+        full = median_ms(partial(score, behaviour, trajectory, scene, candidates=candidates),
                          args.repeats)
         alone_all.append(alone)
         full_all.append(full)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import io
 import json
+import os
 import sys
 from importlib.metadata import version
 from pathlib import Path
@@ -274,6 +275,9 @@ def main(argv: list[str] | None = None) -> int:
         return args.handler(args)
     except RoboFollowError as error:
         print(error.render(), file=sys.stderr)
+        return 1
+    except BrokenPipeError:  # output piped into e.g. `head`, which stopped reading
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115  (no flush error at exit)
         return 1
 
 

@@ -4,6 +4,8 @@ candidates."""
 
 from __future__ import annotations
 
+import dataclasses
+
 from robofollow.build import Compiled
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
@@ -29,6 +31,8 @@ def score_recording(compiled: Compiled, record: dict, trajectory: Trajectory,
         raise RecordingMismatchError(
             f"the trajectory's bodies ({', '.join(sorted(trajectory.bodies))}) are not those "
             f"of {record['scene']} layout {record['layout']} ({', '.join(sorted(expected))})")
-    trajectory.meta.setdefault("layout", record["layout"])
+    if layout is None:  # recorded elsewhere without a layout name: the episode's, checked above
+        trajectory = dataclasses.replace(trajectory, meta={**trajectory.meta,
+                                                           "layout": record["layout"]})
     return score(Behaviour.model_validate(record["behaviour"]), trajectory, scene, profile,
                  episode=record["episode"], candidates=compiled.candidates(record["scene"]))
