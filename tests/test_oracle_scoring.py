@@ -124,6 +124,14 @@ def test_a_recording_from_another_layout_is_refused(expert):
         score_recording(compiled, episode(PLACE), moved)
 
 
+def test_a_recording_of_another_scene_cannot_be_scored(expert):
+    with pytest.raises(TrajectoryError, match="unknown bodies"):
+        score(asked(), expert, benchmark().spec.scenes["scene2"])
+    nameless = dataclasses.replace(expert, meta={})
+    with pytest.raises(TrajectoryError, match="layout None"):
+        scored(nameless)
+
+
 def test_bad_trajectory_files_say_what_is_wrong(tmp_path, expert):
     (tmp_path / "text.npz").write_text("not an archive")
     with pytest.raises(TrajectoryError, match="not a zip archive"):

@@ -15,7 +15,7 @@ from robofollow.compiler.profile import ScoringProfile
 from robofollow.compiler.spec import Scene
 from robofollow.compiler.world import World
 from robofollow.oracle import predicates as P
-from robofollow.trajectory import ARMS, Trajectory
+from robofollow.trajectory import ARMS, Trajectory, TrajectoryError
 
 GRIPPER_COLUMNS = (6, 13)  # the gripper entries of the 14-D action, [left, right]
 
@@ -31,6 +31,12 @@ class Grasp:
 
 class Recording:
     def __init__(self, trajectory: Trajectory, scene: Scene, profile: ScoringProfile):
+        unknown = [b for b in trajectory.bodies if b not in scene.bodies]
+        if unknown or trajectory.meta.get("layout") not in scene.layouts:
+            raise TrajectoryError(f"the trajectory does not belong to {scene.id}: "
+                                  + (f"unknown bodies {', '.join(unknown)}" if unknown else
+                                     f"layout {trajectory.meta.get('layout')!r} is not one of "
+                                     f"its layouts"))
         self.trajectory, self.scene, self.profile = trajectory, scene, profile
         self.bodies = trajectory.bodies
         self.positions = np.asarray(trajectory.positions, dtype=float)  # (T, B, 3)
