@@ -81,6 +81,20 @@ def test_a_grasp_attempt_on_the_wrong_object_loses_everything(expert):
     assert "first closed on yellow_block_2" in result.stages[0].reason
 
 
+def test_in_a_stack_the_body_at_the_grippers_height_is_the_one_attempted():
+    record = episode("scene4/L0/s41_r_unstack_green_cylinder_to_slot6#r1")
+    scene = benchmark().spec.scenes["scene4"]
+    trajectory = run_expert(scene, record).trajectory
+    behaviour = Behaviour.model_validate(record["behaviour"])
+    result = score(behaviour, trajectory, scene)
+    assert result.intent_score == 1.0
+    grasp = result.stages[0].first_step
+    ee = trajectory.ee_positions.copy()
+    ee[grasp, 1, 2] = trajectory.positions[grasp, trajectory.index("blue_cube"), 2]
+    lowered = score(behaviour, edited(trajectory, ee_positions=ee), scene)
+    assert "first closed on blue_cube" in lowered.stages[0].reason
+
+
 def test_the_finish_deadline(expert):
     frame = release_frame(expert)
     late = scored(held(expert, frame + 5, 200))  # pauses 200 frames before going home

@@ -79,6 +79,18 @@ def test_every_rejection_says_why(compiled):
     assert off_way and all(r.layout == "scene3_3" or r.layout == "scene3_4" for r in off_way)
 
 
+def test_a_covered_object_is_not_asked_for(compiled):
+    """Where a layout stacks a body on a task's object, no test task moves that object."""
+    _, _, splits = compiled
+    covered = [r for r in splits.rejected if r.reason.startswith("the object to move is covered")]
+    assert {(r.layout, r.origin) for r in covered} >= {
+        ("scene4_6", "s41_l_pick_yellow_cylinder")}
+    assert "green_cylinder rests on yellow_cylinder" in covered[0].reason
+    for task in splits.tasks:
+        if task.layout == "scene4_6":
+            assert all(s.source != "yellow_cylinder" for s in task.behaviour.steps), task.id
+
+
 def test_a_changed_layout_can_change_the_referent(compiled):
     _, _, splits = compiled
     task = next(t for t in splits.tasks

@@ -153,6 +153,12 @@ class _Generator:
             self.reject(level, layout, instruction, origin,
                         f"outside the training repertoire: {describe(behaviour)}")
             return
+        covered = [f"{b} rests on {s.source}" for s in behaviour.steps
+                   for b in world.carried_by(s.source)]
+        if covered:
+            self.reject(level, layout, instruction, origin, f"the object to move is covered "
+                        f"({', '.join(covered)}); no training task moves a stack")
+            return
         stray = [b for step in behaviour.steps for b in off_route(step, world)]
         if stray:
             self.reject(level, layout, instruction, origin,

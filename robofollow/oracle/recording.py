@@ -71,28 +71,25 @@ class Recording:
 
     def grasps(self, arm: int) -> list[Grasp]:
         """The arm's grasp attempts: closes with a graspable body within the grasp radius
-        (closes in free air are not attempts). The body is the nearest one in the plane that
-        does not carry another body (the top of a stack is what a gripper reaches)."""
+        (closes in free air are not attempts). The body is the nearest one in the plane; in a
+        stack (bodies within `support_xy` of it in the plane), the one nearest the gripper in
+        height."""
         if arm not in self._grasps:
             attempts = []
             for frame in self.closes(arm):
                 frame = int(frame)
-                body, distance = P.nearest(self.xy[frame], self.ee[frame, arm, :2],
-                                           self.reachable(frame))
+                ee = self.ee[frame, arm]
+                body, distance = P.nearest(self.xy[frame], ee[:2], self.graspable)
                 if distance < self.profile.grasp_radius:
-                    attempts.append(Grasp(frame, body, distance))
+                    attempts.append(Grasp(frame, self._in_stack(body, frame, ee[2]), distance))
             self._grasps[arm] = attempts
         return self._grasps[arm]
 
-    def reachable(self, frame: int) -> np.ndarray:
-        """Graspable bodies that carry no other graspable body at this frame."""
-        p, support = self.profile, []
-        for body in self.graspable:
-            offset = np.linalg.norm(self.xy[frame, self.graspable] - self.xy[frame, body], axis=1)
-            rise = self.z[frame, self.graspable] - self.z[frame, body]
-            if np.any((offset <= p.support_xy) & (rise >= p.support_rise)):
-                support.append(body)
-        return np.setdiff1d(self.graspable, support)
+    def _in_stack(self, body: int, frame: int, height: float) -> int:
+        """Of the bodies stacked with `body` (itself included), the one nearest `height`."""
+        offset = np.linalg.norm(self.xy[frame, self.graspable] - self.xy[frame, body], axis=1)
+        stack = self.graspable[offset <= self.profile.support_xy]
+        return int(stack[np.argmin(np.abs(self.z[frame, stack] - height))])
 
     def support_of(self, body: int, frame: int) -> int | None:
         """The body directly under `body` at this frame, if it rests on one."""

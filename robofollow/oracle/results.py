@@ -11,7 +11,7 @@ class StageResult(Model):
     weight: float
     intent: float  # credit earned, 0 or the weight
     execution: float
-    first_step: int | None  # frame where the stage's intent was first met
+    first_step: int | None  # frame where the stage's intent was first met (or that decided it)
     reason: str
 
 
