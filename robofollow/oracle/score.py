@@ -122,12 +122,13 @@ def _prepare(node: dict, mark: dict, marks: dict, step: str, behaviour: Behaviou
         last = marks.get(_last_step(behaviour), {})
         mark["completion"] = next((last[k] for k in ("release", "objective", "lift", "grasp")
                                    if k in last), 0)
-    elif step.startswith("step") and node_id_index(step) > 1:
-        previous = marks[f"step{node_id_index(step) - 1}"]
+    elif step.startswith("step") and _step_number(step) > 1:
+        previous = marks[f"step{_step_number(step) - 1}"]
         mark.setdefault("start", previous.get("lift", previous.get("grasp", 0)))
 
 
-def node_id_index(step: str) -> int:
+def _step_number(step: str) -> int:
+    """The number of a sequence step ("step2" -> 2)."""
     return int(step.removeprefix("step"))
 
 
