@@ -12,6 +12,8 @@ from robofollow.trajectory import ARMS
 
 SIDES = {"left_of": "left of", "right_of": "right of", "behind": "behind",
          "in_front_of": "in front of"}
+HEADINGS = {"left_of": "to the left", "right_of": "to the right", "behind": "away",
+            "in_front_of": "towards the robot"}
 
 
 def describe_actions(rec: Recording) -> str:
@@ -32,7 +34,7 @@ def describe_actions(rec: Recording) -> str:
         if np.linalg.norm(shift) >= p.push_min_execution and \
                 np.abs(rec.rise(body, 0)).max() <= p.on_table_tolerance:
             clauses.append(f"{rec.bodies[body]} was pushed {np.linalg.norm(shift) * 100:.1f} cm "
-                           f"{_heading(shift)}")
+                           f"{HEADINGS[_side(shift)]}")
     return "; ".join(clauses) or "nothing moved"
 
 
@@ -62,11 +64,9 @@ def _where(rec: Recording, body: int) -> str:
     if np.linalg.norm(offset) <= rec.half[other, :2].min() and rec.z[end, body] > rec.z[end, other]:
         kind = rec.scene.bodies[name].kind
         return f"{'in' if kind == 'bowl' else 'on'} {name}"
-    side = max(DIRECTIONS, key=lambda r: float(offset @ np.array(DIRECTIONS[r])))
-    return f"{SIDES[side]} {name}"
+    return f"{SIDES[_side(offset)]} {name}"
 
 
-def _heading(shift: np.ndarray) -> str:
-    side = max(DIRECTIONS, key=lambda r: float(shift @ np.array(DIRECTIONS[r])))
-    return {"left_of": "to the left", "right_of": "to the right", "behind": "away",
-            "in_front_of": "towards the robot"}[side]
+def _side(vector: np.ndarray) -> str:
+    """The direction relation a planar vector points along most."""
+    return max(DIRECTIONS, key=lambda r: float(vector @ np.array(DIRECTIONS[r])))

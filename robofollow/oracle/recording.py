@@ -47,43 +47,44 @@ class Recording:
         self.half = np.array([scene.bodies[b].half_extents for b in self.bodies], dtype=float)
         self.graspable = np.flatnonzero([not scene.bodies[b].fixture for b in self.bodies])
         self.last = len(trajectory) - 1
-        self._events: dict[tuple, np.ndarray] = {}
-        self._grasps: dict[int, list[Grasp]] = {}
-        self.memo: dict = {}  # per-recording results: stage outcomes, supports
+        self.memo: dict = {}  # per-recording results: events, grasps, supports, stage outcomes
 
     def index(self, body: str) -> int:
         return self.bodies.index(body)
 
+    def cached(self, key: tuple, compute):
+        """compute(), once per recording for each key."""
+        if key not in self.memo:
+            self.memo[key] = compute()
+        return self.memo[key]
+
     def closes(self, arm: int, threshold: float | None = None) -> np.ndarray:
         """Frames where the arm's gripper closes (falls to the threshold or below)."""
         threshold = self.profile.close_threshold if threshold is None else threshold
-        key = ("close", arm, threshold)
-        if key not in self._events:
-            self._events[key] = P.falls(self.command[:, arm], threshold)
-        return self._events[key]
+        return self.cached(("close", arm, threshold),
+                            lambda: P.falls(self.command[:, arm], threshold))
 
     def opens(self, arm: int) -> np.ndarray:
         """Frames where the arm's gripper opens (rises to the open threshold or above)."""
-        key = ("open", arm)
-        if key not in self._events:
-            self._events[key] = P.rises(self.command[:, arm], self.profile.open_threshold)
-        return self._events[key]
+        return self.cached(("open", arm),
+                            lambda: P.rises(self.command[:, arm], self.profile.open_threshold))
 
     def grasps(self, arm: int) -> list[Grasp]:
         """The arm's grasp attempts: closes with a graspable body within the grasp radius
         (closes in free air are not attempts). The body is the nearest one in the plane; in a
         stack (bodies within `support_xy` of it in the plane), the one nearest the gripper in
         height."""
-        if arm not in self._grasps:
-            attempts = []
-            for frame in self.closes(arm):
-                frame = int(frame)
-                ee = self.ee[frame, arm]
-                body, distance = P.nearest(self.xy[frame], ee[:2], self.graspable)
-                if distance < self.profile.grasp_radius:
-                    attempts.append(Grasp(frame, self._in_stack(body, frame, ee[2]), distance))
-            self._grasps[arm] = attempts
-        return self._grasps[arm]
+        return self.cached(("grasps", arm), lambda: self._attempts(arm))
+
+    def _attempts(self, arm: int) -> list[Grasp]:
+        attempts = []
+        for frame in self.closes(arm):
+            frame = int(frame)
+            ee = self.ee[frame, arm]
+            body, distance = P.nearest(self.xy[frame], ee[:2], self.graspable)
+            if distance < self.profile.grasp_radius:
+                attempts.append(Grasp(frame, self._in_stack(body, frame, ee[2]), distance))
+        return attempts
 
     def _in_stack(self, body: int, frame: int, height: float) -> int:
         """Of the bodies stacked with `body` (itself included), the one nearest `height`."""
@@ -93,18 +94,14 @@ class Recording:
 
     def support_of(self, body: int, frame: int) -> int | None:
         """The body directly under `body` at this frame, if it rests on one."""
-        key = ("support", body, frame)
-        if key not in self.memo:
-            self.memo[key] = self._support_of(body, frame)
-        return self.memo[key]
+        return self.cached(("support", body, frame), lambda: self._support_of(body, frame))
 
     def _support_of(self, body: int, frame: int) -> int | None:
         p = self.profile
         offset = np.linalg.norm(self.xy[frame] - self.xy[frame, body], axis=1)
         drop = self.z[frame, body] - self.z[frame]
         under = np.flatnonzero((offset <= p.support_xy) & (drop >= p.support_rise))
-        under = [b for b in under if b != body]
-        return int(max(under, key=lambda b: self.z[frame, b])) if under else None
+        return int(under[np.argmax(self.z[frame, under])]) if len(under) else None
 
     def first_grasp(self, arm: int, after: int = 0) -> Grasp | None:
         return next((g for g in self.grasps(arm) if g.frame >= after), None)

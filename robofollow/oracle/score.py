@@ -106,11 +106,11 @@ def evaluate(rec: Recording, behaviour: Behaviour) -> list[StageResult]:
 
 def _evaluate_node(rec: Recording, node: dict, key: str, mark: dict) -> Outcome:
     """One stage's outcome, computed once per recording for the same check and start marks."""
-    memo_key = (key, tuple(sorted(mark.items())))
-    if memo_key not in rec.memo:
+    def run() -> tuple[Outcome, dict]:
         outcome = EVALUATORS[node["intent"]["predicate"]](rec, node, mark)
-        rec.memo[memo_key] = (outcome, dict(mark))
-    outcome, after = rec.memo[memo_key]
+        return outcome, dict(mark)
+
+    outcome, after = rec.cached((key, tuple(sorted(mark.items()))), run)
     mark.update(after)
     return outcome
 

@@ -126,8 +126,8 @@ def _release(rec: Recording, arm: int, marks: dict) -> int | None:
     return release
 
 
-def _placed(rec: Recording, node: dict, marks: dict, holds: np.ndarray, where: str,
-            steady: np.ndarray | None = None) -> Outcome:
+def _placed(rec: Recording, node: dict, marks: dict, holds: tuple[np.ndarray, np.ndarray],
+            where: str, steady: np.ndarray | None = None) -> Outcome:
     """Shared shape of the placing stages: Intent when `holds` first after the lift with the
     intent thresholds; Execution when the final thresholds hold at release and at the end
     (and `steady` from release on)."""
