@@ -75,9 +75,8 @@ class World:
                 and abs(self.poses[b].x - x) <= COLUMN_TOLERANCE]
 
     def carried_by(self, body: str) -> list[str]:
-        """Bodies the layout stacks on `body`."""
-        return [b for b, placed in self.layout.placed.items() if placed.support == body
-                and self.bodies[body].kind != "bowl"]
+        """Bodies the layout puts on (or in) `body`."""
+        return [b for b, placed in self.layout.placed.items() if placed.support == body]
 
     def bottom(self, body: str) -> float:
         return self.poses[body].z - self.bodies[body].half_extents[2]
