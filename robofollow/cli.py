@@ -91,6 +91,16 @@ def cmd_audit(args) -> int:
     return 0 if clean(compiled) else 1
 
 
+def _positive(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
 def _size(text: str) -> tuple[int, int]:
     try:
         width, height = (int(v) for v in text.lower().split("x"))
@@ -103,6 +113,7 @@ def _size(text: str) -> tuple[int, int]:
 
 def cmd_expert(args) -> int:
     from robofollow.build import compile_specs, find_episode
+    from robofollow.sim.cameras import side_by_side
     from robofollow.sim.rollout import run_expert
     from robofollow.sim.simulation import CONTROL_HZ
     from robofollow.sim.video import write_video
@@ -110,10 +121,12 @@ def cmd_expert(args) -> int:
     compiled = compile_specs(Path(args.specs))
     episode = find_episode(compiled, args.episode)
     width, height = args.image_size
+    frames: list = []
     result = run_expert(compiled.spec.scenes[episode["scene"]], episode,
-                        render=bool(args.video), width=width, height=height)
+                        (lambda images: frames.append(side_by_side(images))) if args.video
+                        else None, width, height)
     if args.video:
-        write_video(args.video, result.frames, CONTROL_HZ)
+        write_video(args.video, frames, CONTROL_HZ)
     if args.trajectory:
         result.trajectory.save(args.trajectory)
     if args.json:
@@ -172,6 +185,40 @@ def cmd_render(args) -> int:
     layout_picture(scenes[args.scene], layout, args.seed, width, height).save(args.output)
     print(f"{args.scene}/{layout} drawn to {args.output}")
     return 0
+
+
+def cmd_generate(args) -> int:
+    from robofollow.build import compile_specs
+    from robofollow.data.generate import generate
+    from robofollow.data.jobs import select_tasks
+    from robofollow.data.units import Options
+
+    specs = Path(args.specs)
+    compiled = compile_specs(specs)
+    width, height = args.image_size
+    tasks = select_tasks(compiled, [t for t in (args.tasks or "").split(",") if t.strip()])
+    options = Options(args.format, args.episodes_per_task, tuple(tasks), width, height,
+                      args.instructions, compiled.spec.digest)
+    result = generate(compiled, specs, Path(args.out), options, args.workers, args.resume,
+                      progress=not args.quiet)
+    if result.already_complete:
+        print(f"{args.out} is already complete: {result.episodes} episodes")
+    else:
+        print(f"{args.out}: {result.episodes} episodes ({args.format}) from "
+              f"{result.demonstrations} demonstrations of {len(tasks)} tasks, "
+              f"{result.recorded} recorded now, {result.discarded} attempts discarded, "
+              f"{result.seconds / 60:.1f} min")
+    for failure in result.failed:
+        print(f"  failed: {failure['failed']}", file=sys.stderr)
+    return 1 if result.failed else 0
+
+
+def cmd_dataset_check(args) -> int:
+    from robofollow.data.check import check
+
+    report = check(Path(args.dataset))
+    print(json.dumps(report.to_dict(), indent=1) if args.json else report.render())
+    return 0 if report.ok else 1
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -266,6 +313,50 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--image-size", type=_size, default=(640, 480), metavar="WxH",
                    help="size of each of the two views (default: 640x480)")
     p.set_defaults(handler=cmd_render)
+    p = commands.add_parser(
+        "generate", help="record expert demonstrations of the training tasks as a dataset",
+        description="Run the scripted expert on every training task (seeds fixed per task and "
+                    "episode; an attempt the oracle does not score complete is discarded and "
+                    "the next seed tried) and write a LeRobot v2.1 / v3.0 or HDF5 dataset with "
+                    "the 14-D state and action, three camera videos and the instruction. "
+                    "Interrupted runs continue with --resume.",
+        epilog="examples:\n  robofollow generate specs/ --out demos/            # 50 per "
+               "task, 3,750 episodes\n  robofollow generate specs/ --out small/ "
+               "--tasks scene1,pickup_left_cube --episodes-per-task 3\n  robofollow dataset "
+               "check demos/", formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("specs", nargs="?", default="specs",
+                   help="a spec file or a folder of .rf files (default: specs)")
+    p.add_argument("--out", required=True, metavar="DIR", help="dataset folder (new or empty, "
+                                                              "or the one to --resume)")
+    p.add_argument("--episodes-per-task", type=_positive, default=50, metavar="N",
+                   help="demonstrations per training task (default: 50)")
+    p.add_argument("--tasks", metavar="LIST", help="comma-separated training task labels "
+                   "and/or scene ids (default: every training task)")
+    p.add_argument("--workers", type=_positive, default=os.cpu_count() or 1, metavar="N",
+                   help="worker processes, one renderer each (default: the number of CPUs)")
+    p.add_argument("--format", choices=("lerobot-v2.1", "lerobot-v3.0", "hdf5"),
+                   default="lerobot-v2.1", help="dataset format (default: lerobot-v2.1)")
+    p.add_argument("--image-size", type=_size, default=(320, 240), metavar="WxH",
+                   help="camera image size (default: 320x240)")
+    p.add_argument("--instructions", choices=("sample", "all"), default="sample",
+                   help="sample: one paraphrase per episode; all: every paraphrase as its own "
+                        "episode (default: sample)")
+    p.add_argument("--resume", action="store_true",
+                   help="continue an interrupted run in DIR (same options)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.set_defaults(handler=cmd_generate)
+
+    p = commands.add_parser("dataset", help="dataset tools (check)",
+                            description="Tools for generated datasets.")
+    tools = p.add_subparsers(dest="tool", metavar="TOOL", required=True)
+    q = tools.add_parser(
+        "check", help="validate a dataset against its format's rules",
+        description="Validate a LeRobot v2.1 / v3.0 or HDF5 dataset: features, shapes, dtypes, "
+                    "fps, indices, timestamps, frame counts against the videos, statistics. "
+                    "Prints the findings; exit status 1 when there is any.")
+    q.add_argument("dataset", metavar="DIR", help="the dataset folder")
+    q.add_argument("--json", action="store_true", help="print the report as JSON")
+    q.set_defaults(handler=cmd_dataset_check)
     return parser
 
 

@@ -29,7 +29,7 @@ def perform(record: dict, behaviour: Behaviour | None = None, edit=None, extra: 
     points = plan(behaviour or behaviour_of(record), world)
     actions = Expert(sim).actions(edit(points) if edit else points)
     actions = list(actions) + [actions[-1]] * extra
-    trajectory, _ = execute(sim, actions, {k: record[k] for k in META_KEYS})
+    trajectory = execute(sim, actions, {k: record[k] for k in META_KEYS})
     return score(behaviour_of(record), trajectory, scene, episode=record["episode"],
                  candidates=benchmark().candidates(record["scene"]))
 
@@ -138,7 +138,7 @@ def test_a_no_op_scores_zero_everywhere(asked):
     scene = benchmark().spec.scenes[record["scene"]]
     sim = Simulation(scene, record["layout"], 64, 48)
     sim.reset(record["seed"])
-    trajectory, _ = execute(sim, [robot.home_state()] * 150, {k: record[k] for k in META_KEYS})
+    trajectory = execute(sim, [robot.home_state()] * 150, {k: record[k] for k in META_KEYS})
     result = score(behaviour_of(record), trajectory, scene, candidates=benchmark().candidates(
         record["scene"]))
     assert all(c == (0.0, 0.0) for c in credits(result)) and not result.complete

@@ -94,8 +94,7 @@ class RoboFollowEnv(gym.Env):
         return self._observation(), 0.0, False, truncated, self._info()
 
     def _observation(self) -> dict:
-        state = np.clip(self.sim.state(), robot.ACTION_LOW, robot.ACTION_HIGH).astype(np.float32)
-        return {"images": self.cameras.images(), "state": state,
+        return {"images": self.cameras.images(), "state": robot.observed_state(self.sim.state()),
                 "instruction": self.episode["instruction"]}
 
     def _info(self) -> dict:

@@ -33,3 +33,13 @@ def home_state() -> np.ndarray:
     """The 14-D joint target of both arms at rest, grippers open."""
     arm = np.concatenate([HOME, [1.0]])
     return np.concatenate([arm, arm])
+
+
+def observed_state(state: np.ndarray) -> np.ndarray:
+    """The 14-D state as a policy observes it (env and datasets): within the joint limits,
+    float32. Works on one state or a (T, 14) array."""
+    return np.clip(state, ACTION_LOW, ACTION_HIGH).astype(np.float32)
+
+
+JOINT_NAMES = tuple(f"{arm}_{name}" for arm in ARMS
+                    for name in [f"joint_{i}" for i in range(len(ARM_JOINTS))] + ["gripper"])

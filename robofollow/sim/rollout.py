@@ -4,7 +4,8 @@ and scoring the recording with the oracle."""
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -14,7 +15,7 @@ from robofollow.compiler.spec import Scene
 from robofollow.oracle.results import EpisodeScore
 from robofollow.oracle.score import score
 from robofollow.sim import robot
-from robofollow.sim.cameras import Cameras, side_by_side
+from robofollow.sim.cameras import Cameras
 from robofollow.sim.expert import Expert
 from robofollow.sim.recorder import Recorder
 from robofollow.sim.simulation import Simulation
@@ -30,7 +31,6 @@ class ExpertRun:
     steps: int
     seconds: float
     trajectory: Trajectory
-    frames: list[np.ndarray] = field(default_factory=list)  # side-by-side camera rows
 
     @property
     def achieved(self) -> bool:
@@ -45,37 +45,72 @@ class ExpertRun:
                 "seconds": round(self.seconds, 3)}
 
 
-def execute(sim: Simulation, actions, meta: dict,
-            cameras: Cameras | None = None) -> tuple[Trajectory, list[np.ndarray]]:
-    """Record the settled start (arms at home), then step and record each action."""
-    recorder, frames = Recorder(sim, meta), []
+OnImages = Callable[[dict[str, np.ndarray]], None]
+
+
+def execute(sim: Simulation, actions, meta: dict, on_frame: Callable[[], None] | None = None
+            ) -> Trajectory:
+    """Record the settled start (arms at home), then step and record each action; `on_frame`
+    is called after each recorded frame (e.g. to render it)."""
+    recorder = Recorder(sim, meta)
 
     def record(action: np.ndarray) -> None:
         recorder.frame(action)
-        if cameras:
-            frames.append(side_by_side(cameras.images()))
+        if on_frame:
+            on_frame()
 
     record(robot.home_state())
     for action in actions:
         sim.step(action)
         record(action)
-    return recorder.trajectory(), frames
+    return recorder.trajectory()
 
 
-def run_expert(scene: Scene, episode: dict, render: bool = False, width: int = 320,
-               height: int = 240) -> ExpertRun:
-    """Reset to the episode's layout and seed, execute the expert's plan, score it."""
-    began = time.perf_counter()
-    sim = Simulation(scene, episode["layout"], width, height)
-    world = sim.reset(episode["seed"])
-    behaviour = Behaviour.model_validate(episode["behaviour"])
-    actions = Expert(sim).actions(plan(behaviour, world))
-    cameras = Cameras(sim, width, height) if render else None
-    try:
-        trajectory, frames = execute(sim, actions, {k: episode[k] for k in META_KEYS}, cameras)
-    finally:
-        if cameras:
-            cameras.close()
-    result = score(behaviour, trajectory, scene, episode=episode["episode"])
-    return ExpertRun(episode["episode"], result, len(actions), time.perf_counter() - began,
-                     trajectory, frames)
+class ExpertRunner:
+    """Runs the expert on episodes, keeping one simulation (and renderer) for the current
+    layout, so consecutive episodes on a layout reuse them. Close it (or use `with`)."""
+
+    def __init__(self, width: int = 320, height: int = 240):
+        self.width, self.height = width, height
+        self.sim: Simulation | None = None
+        self.cameras: Cameras | None = None
+
+    def _simulation(self, scene: Scene, layout: str, render: bool) -> Simulation:
+        if self.sim is None or (self.sim.scene.id, self.sim.layout) != (scene.id, layout):
+            self.close()
+            self.sim = Simulation(scene, layout, self.width, self.height)
+        if render and self.cameras is None:
+            self.cameras = Cameras(self.sim, self.width, self.height)
+        return self.sim
+
+    def run(self, scene: Scene, episode: dict, on_images: OnImages | None = None) -> ExpertRun:
+        """Reset to the episode's layout and seed, execute the expert's plan (handing each
+        frame's camera images to `on_images`, if given), and score the recording."""
+        began = time.perf_counter()
+        sim = self._simulation(scene, episode["layout"], render=on_images is not None)
+        world = sim.reset(episode["seed"])
+        behaviour = Behaviour.model_validate(episode["behaviour"])
+        actions = Expert(sim).actions(plan(behaviour, world))
+        on_frame = (lambda: on_images(self.cameras.images())) if on_images else None
+        trajectory = execute(sim, actions, {k: episode[k] for k in META_KEYS}, on_frame)
+        result = score(behaviour, trajectory, scene, episode=episode["episode"])
+        return ExpertRun(episode["episode"], result, len(actions), time.perf_counter() - began,
+                         trajectory)
+
+    def close(self) -> None:
+        if self.cameras is not None:
+            self.cameras.close()
+        self.sim, self.cameras = None, None
+
+    def __enter__(self) -> "ExpertRunner":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def run_expert(scene: Scene, episode: dict, on_images: OnImages | None = None,
+               width: int = 320, height: int = 240) -> ExpertRun:
+    """One expert episode in a fresh simulation (see ExpertRunner.run)."""
+    with ExpertRunner(width, height) as runner:
+        return runner.run(scene, episode, on_images)

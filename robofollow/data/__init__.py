@@ -1,0 +1,1 @@
+"""Demonstration datasets: recording expert episodes and writing LeRobot / HDF5 datasets."""

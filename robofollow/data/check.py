@@ -1,0 +1,401 @@
+"""`robofollow dataset check DIR`: validate a dataset against its format's rules.
+
+LeRobot v2.1 / v3.0: info.json fields and feature schema (dtypes, shapes, names), episode and
+task tables (contiguous indices, totals), every episode's frames (columns, dtypes, row count,
+frame/episode/global indices, timestamps = frame_index / fps, finite values), every video (it
+opens, resolution, frame count against the episode length) and the statistics (recomputed from
+the frames and compared). HDF5: info, index and each file's arrays and attributes.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import av
+import h5py
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
+from robofollow.data.lerobot import VIDEO_KEYS
+from robofollow.data.stats import array_stats
+from robofollow.sim import robot
+from robofollow.sim.cameras import CAMERA_NAMES
+from robofollow.sim.video import frame_times
+
+WIDTH = len(robot.JOINT_NAMES)
+VECTOR_FEATURES = ("observation.state", "action")
+SCALAR_FEATURES = {"timestamp": "float32", "frame_index": "int64", "episode_index": "int64",
+                   "index": "int64", "task_index": "int64"}
+STATS_TOLERANCE = 1e-4  # absolute, on recomputed state/action statistics
+TIME_TOLERANCE = 1e-4  # s
+
+
+@dataclass
+class Report:
+    format: str = "unknown"
+    episodes: int = 0
+    frames: int = 0
+    errors: list[str] = field(default_factory=list)
+
+    def error(self, where: str, message: str) -> None:
+        self.errors.append(f"{where}: {message}")
+
+    @property
+    def ok(self) -> bool:
+        return not self.errors
+
+    def to_dict(self) -> dict:
+        return {"format": self.format, "episodes": self.episodes, "frames": self.frames,
+                "ok": self.ok, "errors": self.errors}
+
+    def render(self, limit: int = 50) -> str:
+        head = (f"{self.format} dataset: {self.episodes} episodes, {self.frames} frames: "
+                + ("valid" if self.ok else f"{len(self.errors)} problem(s)"))
+        lines = [head] + [f"  - {e}" for e in self.errors[:limit]]
+        if len(self.errors) > limit:
+            lines.append(f"  ... and {len(self.errors) - limit} more (--json lists all)")
+        return "\n".join(lines)
+
+
+def check(root: Path) -> Report:
+    report = Report()
+    if (root / "meta" / "info.json").is_file():
+        info = _load_json(root / "meta" / "info.json", report)
+        version = info.get("codebase_version") if info else None
+        report.format = f"lerobot-{version}"
+        if version == lerobot_v21.VERSION:
+            _check_v21(root, info, report)
+        elif version == lerobot_v30.VERSION:
+            _check_v30(root, info, report)
+        elif info is not None:
+            report.error("meta/info.json", f"codebase_version {version!r} is not v2.1 or v3.0")
+    elif (root / "info.json").is_file():
+        report.format = "hdf5"
+        info = _load_json(root / "info.json", report)
+        if info is not None:
+            _check_hdf5(root, info, report)
+    else:
+        report.error(str(root), "no meta/info.json (LeRobot) or info.json (HDF5): not a dataset")
+    return report
+
+
+def _load_json(path: Path, report: Report):
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as error:
+        report.error(path.name, f"unreadable: {error}")
+        return None
+
+
+def _load_jsonl(path: Path, report: Report) -> list[dict]:
+    records = []
+    try:
+        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            try:
+                records.append(json.loads(line))
+            except ValueError as error:
+                report.error(f"{path.name}:{number}", f"not JSON: {error}")
+    except OSError as error:
+        report.error(path.name, f"unreadable: {error}")
+    return records
+
+
+# -- LeRobot, shared -------------------------------------------------------------------------
+
+def _check_info(info: dict, report: Report, required: tuple[str, ...]) -> dict:
+    """The feature schema and top-level fields; returns the features (or {})."""
+    for key in ("robot_type", "fps", "total_episodes", "total_frames", "total_tasks",
+                "data_path", "features") + required:
+        if key not in info:
+            report.error("meta/info.json", f"missing {key!r}")
+    fps = info.get("fps")
+    if not isinstance(fps, int | float) or fps <= 0:
+        report.error("meta/info.json", f"fps must be a positive number, got {fps!r}")
+    features = info.get("features", {})
+    for key in VECTOR_FEATURES:
+        feature = features.get(key)
+        if feature is None:
+            report.error("meta/info.json", f"feature {key!r} is missing")
+        elif (feature.get("dtype"), list(feature.get("shape", []))) != ("float32", [WIDTH]):
+            report.error("meta/info.json", f"{key} must be float32 [{WIDTH}], got "
+                         f"{feature.get('dtype')} {feature.get('shape')}")
+        elif feature.get("names") and len(feature["names"]) != WIDTH:
+            report.error("meta/info.json", f"{key} has {len(feature['names'])} names for "
+                         f"{WIDTH} values")
+    for key, dtype in SCALAR_FEATURES.items():
+        if features.get(key, {}).get("dtype") != dtype:
+            report.error("meta/info.json", f"feature {key!r} must be {dtype}")
+    for key in VIDEO_KEYS:
+        feature = features.get(key, {})
+        shape = feature.get("shape", [])
+        if feature.get("dtype") != "video" or len(shape) != 3 or shape[2] != 3:
+            report.error("meta/info.json", f"{key} must be a video feature of shape [H, W, 3]")
+    return features
+
+
+def _check_frames(table: pa.Table, where: str, episode: int, length: int, start: int,
+                  task_index: int, fps: float, report: Report) -> None:
+    """One episode's frames: columns, dtypes, count, indices, timestamps, finite values."""
+    missing = [c for c in VECTOR_FEATURES + tuple(SCALAR_FEATURES) if c not in table.column_names]
+    if missing:
+        report.error(where, f"missing columns {missing}")
+        return
+    if table.num_rows != length:
+        report.error(where, f"{table.num_rows} frames, the episode table says {length}")
+    for key in VECTOR_FEATURES:
+        kind = table.schema.field(key).type
+        if not (pa.types.is_fixed_size_list(kind) and kind.list_size == WIDTH
+                and kind.value_type == pa.float32()):
+            report.error(where, f"{key} is {kind}, expected fixed_size_list<float>[{WIDTH}]")
+            continue
+        values = table.column(key).combine_chunks().flatten().to_numpy()
+        if not np.all(np.isfinite(values)):
+            report.error(where, f"{key} has non-finite values")
+    for key, dtype in SCALAR_FEATURES.items():
+        if table.schema.field(key).type != pa.from_numpy_dtype(np.dtype(dtype)):
+            report.error(where, f"{key} is {table.schema.field(key).type}, expected {dtype}")
+    n = table.num_rows
+    frames = table.column("frame_index").to_numpy()
+    if not np.array_equal(frames, np.arange(n)):
+        report.error(where, "frame_index is not 0, 1, ... in order")
+    if not np.all(table.column("episode_index").to_numpy() == episode):
+        report.error(where, f"episode_index is not {episode} throughout")
+    if not np.array_equal(table.column("index").to_numpy(), start + np.arange(n)):
+        report.error(where, f"index is not {start}, {start + 1}, ... (global frame order)")
+    if not np.all(table.column("task_index").to_numpy() == task_index):
+        report.error(where, f"task_index is not {task_index} throughout")
+    times = table.column("timestamp").to_numpy().astype(np.float64)
+    if np.abs(times - np.arange(n) / fps).max(initial=0.0) > TIME_TOLERANCE:
+        report.error(where, f"timestamp is not frame_index / fps ({fps})")
+
+
+def _check_stats(stats: dict, table: pa.Table, where: str, report: Report) -> None:
+    """Stored episode statistics against the frames (state, action) and image ranges."""
+    for key in VECTOR_FEATURES:
+        stored = stats.get(key)
+        if stored is None:
+            report.error(where, f"no statistics for {key}")
+            continue
+        values = table.column(key).combine_chunks().flatten().to_numpy().reshape(-1, WIDTH)
+        expected = array_stats(values)
+        for name in ("min", "max", "mean", "std"):
+            got = np.asarray(stored.get(name, []), dtype=np.float64).reshape(-1)
+            if got.shape != (WIDTH,) or np.abs(got - expected[name]).max() > STATS_TOLERANCE:
+                report.error(where, f"{key} {name} does not match the frames")
+        if list(np.ravel(stored.get("count", []))) != expected["count"]:
+            report.error(where, f"{key} count {stored.get('count')} is not {expected['count']}")
+    for key in VIDEO_KEYS:
+        stored = stats.get(key)
+        if stored is None:
+            report.error(where, f"no statistics for {key}")
+            continue
+        for name in ("min", "max", "mean", "std"):
+            values = np.asarray(stored.get(name, []), dtype=np.float64)
+            if values.shape != (3, 1, 1) or values.min() < 0 or values.max() > 1:
+                report.error(where, f"{key} {name} must be 3 x 1 x 1 values in [0, 1]")
+
+
+def _check_video(path: Path, feature: dict, report: Report, where: str) -> list[float] | None:
+    """Opens, has the feature's resolution; its frame times (or None when unusable)."""
+    if not path.is_file():
+        report.error(where, f"missing video {path.name}")
+        return None
+    try:
+        with av.open(str(path)) as container:
+            stream = container.streams.video[0]
+            size = (stream.codec_context.height, stream.codec_context.width)
+        times = frame_times(path)
+    except (av.FFmpegError, IndexError) as error:
+        report.error(where, f"unreadable video: {error}")
+        return None
+    height, width = feature["shape"][:2]
+    if size != (height + height % 2, width + width % 2):
+        report.error(where, f"video is {size[1]}x{size[0]}, the feature says {width}x{height}")
+    return times
+
+
+def _check_totals(info: dict, lengths: list[int], tasks: int, report: Report) -> None:
+    report.episodes, report.frames = len(lengths), sum(lengths)
+    for key, value in (("total_episodes", len(lengths)), ("total_frames", sum(lengths)),
+                       ("total_tasks", tasks)):
+        if info.get(key) != value:
+            report.error("meta/info.json", f"{key} is {info.get(key)}, the dataset has {value}")
+
+
+def _check_sequence(indices: list, where: str, what: str, report: Report) -> bool:
+    if indices != list(range(len(indices))):
+        report.error(where, f"{what} are not 0 .. {len(indices) - 1} in order")
+        return False
+    return True
+
+
+# -- LeRobot v2.1 ----------------------------------------------------------------------------
+
+def _check_v21(root: Path, info: dict, report: Report) -> None:
+    features = _check_info(info, report, ("video_path", "chunks_size", "total_chunks"))
+    meta = root / "meta"
+    episodes = _load_jsonl(meta / "episodes.jsonl", report)
+    tasks = _load_jsonl(meta / "tasks.jsonl", report)
+    stats = {r.get("episode_index"): r.get("stats", {})
+             for r in _load_jsonl(meta / "episodes_stats.jsonl", report)}
+    _check_sequence([t.get("task_index") for t in tasks], "meta/tasks.jsonl", "task indices",
+                    report)
+    task_index = {t.get("task"): t.get("task_index") for t in tasks}
+    if not _check_sequence([e.get("episode_index") for e in episodes], "meta/episodes.jsonl",
+                           "episode indices", report) or report.errors:
+        return
+    _check_totals(info, [e["length"] for e in episodes], len(tasks), report)
+    fps, chunk_size, start = info["fps"], info["chunks_size"], 0
+    for record in episodes:
+        index, length = record["episode_index"], record["length"]
+        where = f"episode {index}"
+        if len(record.get("tasks", [])) != 1 or record["tasks"][0] not in task_index:
+            report.error(where, f"tasks {record.get('tasks')} are not one task of tasks.jsonl")
+            continue
+        chunk = index // chunk_size
+        path = root / info["data_path"].format(episode_chunk=chunk, episode_index=index)
+        try:
+            table = pq.read_table(path)
+        except (OSError, pa.ArrowException) as error:
+            report.error(where, f"cannot read {path.relative_to(root)}: {error}")
+            start += length
+            continue
+        _check_frames(table, where, index, length, start, task_index[record["tasks"][0]], fps,
+                      report)
+        start += length
+        if index not in stats:
+            report.error(where, "no entry in episodes_stats.jsonl")
+        else:
+            _check_stats(stats[index], table, where, report)
+        for key in VIDEO_KEYS:
+            video = root / info["video_path"].format(episode_chunk=chunk, video_key=key,
+                                                     episode_index=index)
+            times = _check_video(video, features[key], report, f"{where} {key}")
+            if times is not None and len(times) != length:
+                report.error(f"{where} {key}", f"video has {len(times)} frames, the episode "
+                             f"{length}")
+
+
+# -- LeRobot v3.0 ----------------------------------------------------------------------------
+
+def _read_parquets(folder: Path, report: Report) -> pa.Table | None:
+    files = sorted(folder.glob("chunk-*/file-*.parquet"))
+    if not files:
+        report.error(str(folder.relative_to(folder.parent.parent)), "no parquet files")
+        return None
+    return pa.concat_tables([pq.read_table(f) for f in files])
+
+
+def _check_v30(root: Path, info: dict, report: Report) -> None:
+    features = _check_info(info, report, ("video_path", "chunks_size"))
+    meta = root / "meta"
+    try:
+        tasks = pq.read_table(meta / "tasks.parquet").to_pylist()
+    except (OSError, pa.ArrowException) as error:
+        report.error("meta/tasks.parquet", f"unreadable: {error}")
+        return
+    if not (meta / "stats.json").is_file():
+        report.error("meta/stats.json", "missing")
+    episodes = _read_parquets(meta / "episodes", report)
+    if episodes is None:
+        return
+    rows = episodes.to_pylist()
+    _check_sequence([t["task_index"] for t in tasks], "meta/tasks.parquet", "task indices",
+                    report)
+    task_index = {t["task"]: t["task_index"] for t in tasks}
+    if not _check_sequence([r["episode_index"] for r in rows], "meta/episodes",
+                           "episode indices", report) or report.errors:
+        return
+    _check_totals(info, [r["length"] for r in rows], len(tasks), report)
+    fps, data_files, video_times = info["fps"], {}, {}
+    start = 0
+    for row in rows:
+        index, length = row["episode_index"], row["length"]
+        where = f"episode {index}"
+        if len(row["tasks"]) != 1 or row["tasks"][0] not in task_index:
+            report.error(where, f"tasks {row['tasks']} are not one task of tasks.parquet")
+            continue
+        if (row["dataset_from_index"], row["dataset_to_index"]) != (start, start + length):
+            report.error(where, f"frames {row['dataset_from_index']}..{row['dataset_to_index']}"
+                         f", expected {start}..{start + length}")
+        name = info["data_path"].format(chunk_index=row["data/chunk_index"],
+                                        file_index=row["data/file_index"])
+        if name not in data_files:
+            try:
+                data_files[name] = pq.read_table(root / name)
+            except (OSError, pa.ArrowException) as error:
+                report.error(where, f"cannot read {name}: {error}")
+                return
+        table = data_files[name]
+        first = table.column("index").to_numpy()
+        rows_of = np.flatnonzero(table.column("episode_index").to_numpy() == index)
+        frames = table.take(pa.array(rows_of))
+        if len(rows_of) and first[rows_of[0]] != start:
+            report.error(where, f"its first frame has index {first[rows_of[0]]}, not {start}")
+        _check_frames(frames, where, index, length, start, task_index[row["tasks"][0]], fps,
+                      report)
+        stats = {key.split("/")[1]: {} for key in row if key.startswith("stats/")}
+        for key, value in row.items():
+            if key.startswith("stats/"):
+                _, feature, stat = key.split("/")
+                stats[feature][stat] = value
+        _check_stats(stats, frames, where, report)
+        start += length
+        for key in VIDEO_KEYS:
+            video = info["video_path"].format(video_key=key,
+                                              chunk_index=row[f"videos/{key}/chunk_index"],
+                                              file_index=row[f"videos/{key}/file_index"])
+            if video not in video_times:
+                video_times[video] = _check_video(root / video, features[key], report, video)
+            times = video_times[video]
+            if times is None:
+                continue
+            low, high = row[f"videos/{key}/from_timestamp"], row[f"videos/{key}/to_timestamp"]
+            inside = sum(low - TIME_TOLERANCE <= t < high - TIME_TOLERANCE for t in times)
+            if inside != length or abs(high - low - length / fps) > TIME_TOLERANCE:
+                report.error(f"{where} {key}", f"{inside} video frames in {low:.3f}..{high:.3f}"
+                             f" s, the episode has {length}")
+
+
+# -- HDF5 ------------------------------------------------------------------------------------
+
+def _check_hdf5(root: Path, info: dict, report: Report) -> None:
+    if info.get("format") != hdf5_export.VERSION:
+        report.error("info.json", f"format {info.get('format')!r} is not "
+                     f"{hdf5_export.VERSION}")
+        return
+    episodes = _load_jsonl(root / "episodes.jsonl", report)
+    if not _check_sequence([e.get("episode_index") for e in episodes], "episodes.jsonl",
+                           "episode indices", report):
+        return
+    height, width, _ = info["image_shape"]
+    lengths = []
+    for record in episodes:
+        where = f"episode {record['episode_index']}"
+        lengths.append(record["length"])
+        try:
+            with h5py.File(root / record["file"], "r") as h5:
+                arrays = {name: h5[name] for name in ("action", "observations/qpos")}
+                for name, data in arrays.items():
+                    if data.dtype != np.float32 or data.shape != (record["length"], WIDTH):
+                        report.error(where, f"{name} is {data.dtype} {data.shape}, expected "
+                                     f"float32 {(record['length'], WIDTH)}")
+                    elif not np.all(np.isfinite(data[()])):
+                        report.error(where, f"{name} has non-finite values")
+                for camera in CAMERA_NAMES:
+                    data = h5[f"observations/images/{camera}"]
+                    if data.dtype != np.uint8 or data.shape != (record["length"], height,
+                                                                 width, 3):
+                        report.error(where, f"images/{camera} is {data.dtype} {data.shape}")
+                if json.loads(h5["instructions"][()]) != record["instructions"]:
+                    report.error(where, "instructions differ from episodes.jsonl")
+        except (OSError, KeyError) as error:
+            report.error(where, f"cannot read {record['file']}: {error}")
+    report.episodes, report.frames = len(lengths), sum(lengths)
+    for key, value in (("total_episodes", len(lengths)), ("total_frames", sum(lengths))):
+        if info.get(key) != value:
+            report.error("info.json", f"{key} is {info.get(key)}, the dataset has {value}")

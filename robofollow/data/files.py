@@ -1,0 +1,35 @@
+"""Small file helpers shared by the dataset writers."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+
+
+def write_json(path: Path, data) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+
+
+def write_jsonl(path: Path, records) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with open(path, "w", encoding="utf-8") as f:
+        f.writelines(json.dumps(r, ensure_ascii=False) + "\n" for r in records)
+
+
+def write_json_atomic(path: Path, data) -> None:
+    """Write through a temporary file and rename: readers see the old file or the new one."""
+    partial = path.with_name(path.name + ".partial")
+    write_json(partial, data)
+    os.replace(partial, path)
+
+
+def link_or_copy(source: Path, target: Path) -> None:
+    """Hard-link a file into the dataset (no second copy on disk), else copy it."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        os.link(source, target)
+    except OSError:
+        shutil.copyfile(source, target)
