@@ -11,7 +11,8 @@ import numpy as np
 from robofollow.sim.cameras import CAMERA_NAMES
 from robofollow.sim.video import DATASET_OPTIONS, VideoEncoder
 
-STATS_SIDE = 160  # px: images are subsampled to about this size for their statistics
+STATS_SIDE = 80  # px: images are subsampled to about this size for their statistics
+STATS_EVERY = 4  # statistics use every 4th frame (LeRobot, too, samples frames for them)
 
 
 def image_key(camera: str) -> str:
@@ -19,16 +20,20 @@ def image_key(camera: str) -> str:
 
 
 class ImageStats:
-    """Per-channel min, max, mean, std over every frame, values scaled to [0, 1] (LeRobot's
-    image statistics, computed on pixels subsampled to about STATS_SIDE px)."""
+    """Per-channel min, max, mean, std, values scaled to [0, 1] (LeRobot's image statistics),
+    over every STATS_EVERY-th frame (the first included), pixels subsampled to about
+    STATS_SIDE px."""
 
     def __init__(self, width: int, height: int):
         self.stride = max(1, max(width, height) // STATS_SIDE)
-        self.frames, self.count = 0, 0
+        self.seen, self.frames, self.count = 0, 0, 0
         self.total, self.squares = np.zeros(3), np.zeros(3)
         self.low, self.high = np.full(3, np.inf), np.full(3, -np.inf)
 
     def add(self, image: np.ndarray) -> None:
+        self.seen += 1
+        if (self.seen - 1) % STATS_EVERY:
+            return
         pixels = image[::self.stride, ::self.stride].reshape(-1, 3).astype(np.float64) / 255.0
         self.frames += 1
         self.count += len(pixels)

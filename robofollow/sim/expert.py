@@ -73,7 +73,8 @@ class Expert:
                     for a in range(2)]
 
     def actions(self, plan: Plan) -> np.ndarray:
-        """The [T, 14] joint targets executing `plan` from home, ending with a short hold."""
+        """The [T, 14] joint targets executing `plan` from home, ending with a short hold
+        (float32 values)."""
         command = robot.home_state()
         at_home = [True, True]
         actions: list[np.ndarray] = []
@@ -100,7 +101,9 @@ class Expert:
                     actions.append(command.copy())
             actions += [command.copy()] * DWELL_STEPS
         actions += [command.copy()] * FINAL_STEPS
-        return np.array(actions)
+        # float32 targets, as a policy sends them: a recorded demonstration's (float32)
+        # actions replay to exactly the same trajectory
+        return np.array(actions, dtype=np.float32).astype(np.float64)
 
     def reach(self, arm: int, target: np.ndarray, yaw: float) -> np.ndarray:
         """IK for a pose reached from home: seeded facing the target, wrist pointing down."""

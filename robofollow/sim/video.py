@@ -35,8 +35,9 @@ class VideoEncoder:
         if frame.shape != (self.height, self.width, 3):
             raise ValueError(f"frame of shape {frame.shape}, expected "
                              f"{(self.height, self.width, 3)}")
-        padded = np.pad(frame, ((0, self.height % 2), (0, self.width % 2), (0, 0)))
-        self.container.mux(self.stream.encode(av.VideoFrame.from_ndarray(padded, format="rgb24")))
+        if self.height % 2 or self.width % 2:
+            frame = np.pad(frame, ((0, self.height % 2), (0, self.width % 2), (0, 0)))
+        self.container.mux(self.stream.encode(av.VideoFrame.from_ndarray(frame, format="rgb24")))
         self.frames += 1
 
     def close(self) -> None:
