@@ -59,7 +59,7 @@ def test_lerobot_v30_packs_episodes_into_files_and_validates(tmp_path, v21):
     frames = read_frames(out / f"videos/{key}/chunk-000/file-000.mp4")
     assert len(frames) == sum(r["length"] for r in rows)
     single = read_frames(v21 / f"videos/chunk-000/{key}/episode_000000.mp4")
-    assert all(np.array_equal(a, b) for a, b in zip(frames[rows[0]["length"]:], single))
+    assert all(np.array_equal(a, b) for a, b in zip(frames[rows[0]["length"]:], single, strict=False))
     tasks = pq.read_table(out / "meta/tasks.parquet")
     assert json.loads(tasks.schema.metadata[b"pandas"])["index_columns"] == ["task"]
     assert tasks.column("task").to_pylist() == list(paraphrases)
@@ -221,5 +221,5 @@ def test_joined_videos_keep_every_frame_in_order(tmp_path):
         expected += read_frames(path)
     concatenate(parts, tmp_path / "all.mp4")
     joined = read_frames(tmp_path / "all.mp4")
-    assert len(joined) == 16 and all(np.array_equal(a, b) for a, b in zip(joined, expected))
+    assert len(joined) == 16 and all(np.array_equal(a, b) for a, b in zip(joined, expected, strict=True))
     assert frame_times(tmp_path / "all.mp4") == pytest.approx([i / 25 for i in range(16)])
