@@ -199,8 +199,15 @@ def cmd_generate(args) -> int:
     tasks = select_tasks(compiled, [t for t in (args.tasks or "").split(",") if t.strip()])
     options = Options(args.format, args.episodes_per_task, tuple(tasks), width, height,
                       args.instructions, compiled.spec.digest)
-    result = generate(compiled, specs, Path(args.out), options, args.workers, args.resume,
-                      progress=not args.quiet)
+    try:
+        result = generate(compiled, specs, Path(args.out), options, args.workers, args.resume,
+                          progress=not args.quiet)
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: the finished demonstrations are kept in {args.out}; run the same "
+              "command with --resume to continue", file=sys.stderr)
+        return 130
+    except OSError as error:
+        raise RoboFollowError(f"cannot write the dataset in {args.out}: {error}") from None
     if result.already_complete:
         print(f"{args.out} is already complete: {result.episodes} episodes")
     else:

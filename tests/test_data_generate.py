@@ -181,3 +181,23 @@ def test_jobs_sample_one_paraphrase_per_episode_or_take_them_all():
     assert sampled == demo_jobs(compiled, 50, [TASKS[0]])
     every = demo_jobs(compiled, 2, [TASKS[0]], "all")
     assert all(j.instructions == paraphrases for j in every)
+
+
+def test_ctrl_c_stops_the_workers_with_a_message_and_resume_finishes(tmp_path):
+    out = tmp_path / "demos"
+    args = [str(builtin_specs()), "--out", str(out), "--tasks", TASKS[1],
+            "--episodes-per-task", "4", "--image-size", "64x48", "--workers", "2", "--quiet"]
+    process = subprocess.Popen([sys.executable, "-m", "robofollow.cli", "generate", *args],
+                               start_new_session=True, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True)
+    units = out / ".work/units" / TASKS[1]
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and process.poll() is None and not (
+            units.is_dir() and any(units.iterdir())):
+        time.sleep(0.05)
+    os.killpg(process.pid, signal.SIGINT)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130
+    assert "run the same command with --resume" in err and "Traceback" not in err
+    assert main(["generate", *args, "--resume"]) == 0
+    assert check(out).ok and check(out).episodes == 4

@@ -13,6 +13,7 @@ from __future__ import annotations
 import json
 import multiprocessing
 import shutil
+import signal
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -82,15 +83,21 @@ _WORKER: dict = {}
 
 
 def _start_worker(specs: str, options: Options, work: Path) -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's: it stops the pool
     compiled = compile_specs(Path(specs))
     _WORKER["recorder"] = UnitRecorder(compiled, options, work)
 
 
-def _record(job: DemoJob) -> dict:
+def _record_with(recorder: UnitRecorder, job: DemoJob) -> dict:
     try:
-        return {"job": job.key, "demo": _WORKER["recorder"].record(job)}
+        return {"job": job.key, "demo": recorder.record(job)}
     except DemoFailedError as error:
         return {"job": job.key, "failed": str(error)}
+
+
+def _record(job: DemoJob) -> dict:
+    """In a pool worker."""
+    return _record_with(_WORKER["recorder"], job)
 
 
 def _record_all(compiled: Compiled, specs: Path, options: Options, work: Path,
@@ -102,10 +109,9 @@ def _record_all(compiled: Compiled, specs: Path, options: Options, work: Path,
     with bar:
         if workers <= 1 or len(todo) <= 1:
             recorder = UnitRecorder(compiled, options, work)
-            _WORKER["recorder"] = recorder
             try:
                 for job in todo:
-                    result = _record(job)
+                    result = _record_with(recorder, job)
                     failed += [result] if "failed" in result else []
                     bar.update()
             finally:
