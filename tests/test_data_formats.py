@@ -43,12 +43,18 @@ def v21(tmp_path_factory) -> Path:
     return out
 
 
+@pytest.fixture(scope="module")
+def v30(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("v30") / "demos"
+    _generate(out, "lerobot-v3.0", instructions="all")
+    return out
+
+
 @pytest.mark.slow
-def test_lerobot_v30_packs_episodes_into_files_and_validates(tmp_path, v21):
-    out = tmp_path / "v30"
-    result = _generate(out, "lerobot-v3.0", instructions="all")
+def test_lerobot_v30_packs_episodes_into_files_and_validates(v30, v21):
+    out = v30
     paraphrases = next(t.paraphrases for t in benchmark().spec.tasks if t.label == TASK)
-    assert result.episodes == 2 * len(paraphrases)
+    assert json.loads((out / "manifest.json").read_text())["episodes"] == 2 * len(paraphrases)
     report = check(out)
     assert report.ok, report.errors
     rows = pq.read_table(out / "meta/episodes/chunk-000/file-000.parquet").to_pylist()
@@ -142,6 +148,24 @@ def test_dataset_check_reports_what_is_wrong_and_where(v21, tmp_path, damage, fi
     info_path.write_text(json.dumps(info))
     report = check(root)
     assert not report.ok
+    assert any(finding in error for error in report.errors), report.errors
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("field, change, finding", [
+    ("videos/observation.images.cam_high/from_timestamp", 0.2, "video frames in"),
+    ("dataset_from_index", 1, ", expected "),  # "frames 135..268, expected 134..268"
+    ("length", 1, "total_frames is"),
+])
+def test_dataset_check_reports_a_broken_v30_episode_table(v30, tmp_path, field, change,
+                                                          finding):
+    root = tmp_path / "copy"
+    shutil.copytree(v30, root)
+    path = root / "meta/episodes/chunk-000/file-000.parquet"
+    rows = pq.read_table(path).to_pylist()
+    rows[1][field] += change
+    pq.write_table(pa.Table.from_pylist(rows), path)
+    report = check(root)
     assert any(finding in error for error in report.errors), report.errors
 
 
