@@ -14,6 +14,7 @@ from robofollow.compiler import lf
 from robofollow.compiler.notation import notation
 from robofollow.compiler.parser import parse
 from robofollow.compiler.realize import STYLES, realize
+from robofollow.data.jobs import FORMATS, INSTRUCTION_MODES
 from robofollow.errors import InstructionError, RoboFollowError
 
 _PARSE_EXAMPLES = """\
@@ -341,11 +342,11 @@ def build_parser() -> argparse.ArgumentParser:
                    "and/or scene ids (default: every training task)")
     p.add_argument("--workers", type=_positive, default=os.cpu_count() or 1, metavar="N",
                    help="worker processes, one renderer each (default: the number of CPUs)")
-    p.add_argument("--format", choices=("lerobot-v2.1", "lerobot-v3.0", "hdf5"),
+    p.add_argument("--format", choices=FORMATS,
                    default="lerobot-v2.1", help="dataset format (default: lerobot-v2.1)")
     p.add_argument("--image-size", type=_size, default=(320, 240), metavar="WxH",
                    help="camera image size (default: 320x240)")
-    p.add_argument("--instructions", choices=("sample", "all"), default="sample",
+    p.add_argument("--instructions", choices=INSTRUCTION_MODES, default="sample",
                    help="sample: one paraphrase per episode; all: every paraphrase as its own "
                         "episode (default: sample)")
     p.add_argument("--resume", action="store_true",

@@ -18,8 +18,8 @@ from hypothesis.extra.numpy import arrays
 
 from robofollow.data import units
 from robofollow.data.check import check
-from robofollow.data.generate import generate
-from robofollow.data.jobs import demo_seed
+from robofollow.data.generate import WRITERS, generate
+from robofollow.data.jobs import FORMATS, demo_seed
 from robofollow.data.lerobot_v30 import file_groups
 from robofollow.data.stats import aggregate, array_stats
 from robofollow.data.units import Options
@@ -225,6 +225,10 @@ def test_aggregated_statistics_equal_the_statistics_of_the_whole(values, cut):
     for key in ("min", "max", "mean", "std"):
         np.testing.assert_allclose(merged[key], whole[key], rtol=1e-7, atol=1e-6)
     assert merged["count"] == whole["count"] == [len(values)]
+
+
+def test_every_format_the_command_offers_has_a_writer():
+    assert tuple(WRITERS) == FORMATS
 
 
 def test_file_groups_fill_files_up_to_the_limit_in_order():

@@ -6,17 +6,21 @@ from __future__ import annotations
 import difflib
 import hashlib
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from robofollow.build import Compiled
 from robofollow.errors import RoboFollowError
+
+if TYPE_CHECKING:  # the CLI reads this module's constants without loading the compiler
+    from robofollow.build import Compiled
 
 # Demonstration seeds live far above the test episodes' seeds (split seed bases are small and
 # rounds few), so no training demonstration shares a jittered start with a test episode.
 DEMO_SEED_BASE = 1_000_000
 MAX_ATTEMPTS = 10  # seeds tried per episode before the run stops with an error
 INSTRUCTION_MODES = ("sample", "all")
+FORMATS = ("lerobot-v2.1", "lerobot-v3.0", "hdf5")
 
 
 class UnknownTaskError(RoboFollowError):

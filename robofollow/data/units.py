@@ -28,7 +28,6 @@ from robofollow.sim.rollout import ExpertRunner
 from robofollow.sim.simulation import CONTROL_HZ
 from robofollow.trajectory import Trajectory
 
-FORMATS = ("lerobot-v2.1", "lerobot-v3.0", "hdf5")
 ROBOT_TYPE = "aloha_agilex"  # upstream's robot_type, so existing ALOHA configs apply
 
 
@@ -45,10 +44,6 @@ class Options:
 
     def to_json(self) -> dict:
         return dict(asdict(self), tasks=list(self.tasks))
-
-    @classmethod
-    def from_json(cls, data: dict) -> "Options":
-        return cls(**dict(data, tasks=tuple(data["tasks"])))
 
 
 def dataset_arrays(trajectory: Trajectory) -> dict[str, np.ndarray]:
