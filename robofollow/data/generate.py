@@ -22,7 +22,7 @@ from tqdm import tqdm
 
 from robofollow.build import Compiled, compile_specs
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
-from robofollow.data.files import write_json, write_json_atomic
+from robofollow.data.files import write_json_atomic
 from robofollow.data.jobs import DemoJob, demo_jobs
 from robofollow.data.units import DemoFailedError, Options, UnitRecorder, unit_path
 from robofollow.errors import RoboFollowError
@@ -178,7 +178,8 @@ def generate(compiled: Compiled, specs: Path, out: Path, options: Options, worke
                               manifest["discarded_attempts"], manifest["failed"],
                               already_complete=True)
     shutil.rmtree(work / "tmp", ignore_errors=True)  # half-written units of a killed run
-    write_json(work / "options.json", options.to_json())
+    work.mkdir(parents=True, exist_ok=True)
+    write_json_atomic(work / "options.json", options.to_json())
     jobs = demo_jobs(compiled, options.episodes_per_task, list(options.tasks),
                      options.instructions)
     done_before = sum((unit_path(work, job) / "demo.json").is_file() for job in jobs)
