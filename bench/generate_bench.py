@@ -51,7 +51,7 @@ def _labels(count: int) -> list[str]:
 def _generate_child(out: str, options: Options, workers: int, queue) -> None:
     compiled = compile_specs(builtin_specs())
     began = time.perf_counter()
-    result = generate(compiled, builtin_specs(), Path(out), options, workers, progress=False)
+    result = generate(compiled, Path(out), options, workers, progress=False)
     seconds = time.perf_counter() - began
     manifest = json.loads((Path(out) / "manifest.json").read_text())
     frames = sum(d["length"] for d in manifest["demos"])

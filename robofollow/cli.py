@@ -201,7 +201,7 @@ def cmd_generate(args) -> int:
     options = Options(args.format, args.episodes_per_task, tuple(tasks), width, height,
                       args.instructions, compiled.spec.digest)
     try:
-        result = generate(compiled, specs, Path(args.out), options, args.workers, args.resume,
+        result = generate(compiled, Path(args.out), options, args.workers, args.resume,
                           progress=not args.quiet)
     except KeyboardInterrupt:
         print(f"\ninterrupted: the finished demonstrations are kept in {args.out}; run the same "

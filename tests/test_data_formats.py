@@ -23,7 +23,6 @@ from robofollow.data.jobs import FORMATS, demo_seed
 from robofollow.data.lerobot_v30 import file_groups
 from robofollow.data.stats import aggregate, array_stats
 from robofollow.data.units import Options
-from robofollow.resources import builtin_specs
 from robofollow.sim.rollout import ExpertRunner
 from robofollow.sim.video import VideoEncoder, concatenate, frame_times, read_frames
 from tests.sim_helpers import benchmark
@@ -33,7 +32,7 @@ TASK = "pickup_yellow_block_1_left"
 
 def _generate(out: Path, fmt: str, per_task: int = 2, instructions: str = "sample"):
     options = Options(fmt, per_task, (TASK,), 64, 48, instructions, benchmark().spec.digest)
-    return generate(benchmark(), builtin_specs(), out, options, progress=False)
+    return generate(benchmark(), out, options, progress=False)
 
 
 @pytest.fixture(scope="module")

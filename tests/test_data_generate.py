@@ -45,7 +45,7 @@ def _options(tasks=TASKS, per_task=3, size=(320, 240), fmt="lerobot-v2.1",
 @pytest.fixture(scope="module")
 def dataset(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("generated") / "demos"
-    result = generate(benchmark(), builtin_specs(), out, _options(), workers=2, progress=False)
+    result = generate(benchmark(), out, _options(), workers=2, progress=False)
     assert (result.episodes, result.demonstrations, result.recorded) == (6, 6, 6)
     return out
 
@@ -161,7 +161,7 @@ def test_resume_refuses_other_options_and_a_folder_of_other_files(tmp_path, caps
     (out / ".work").mkdir(parents=True)
     (out / ".work" / "options.json").write_text(json.dumps(_options().to_json()))
     with pytest.raises(GenerateError, match="episodes_per_task differ"):
-        generate(benchmark(), builtin_specs(), out, _options(per_task=5), resume=True,
+        generate(benchmark(), out, _options(per_task=5), resume=True,
                  progress=False)
     other = tmp_path / "other"
     other.mkdir()

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from robofollow.build import Compiled, compile_specs
+from robofollow.build import Compiled
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
 from robofollow.data.files import write_json_atomic
 from robofollow.data.jobs import DemoJob, demo_jobs
@@ -82,9 +82,8 @@ def _manifest(out: Path) -> dict:
 _WORKER: dict = {}
 
 
-def _start_worker(specs: str, options: Options, work: Path) -> None:
+def _start_worker(compiled: Compiled, options: Options, work: Path) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's: it stops the pool
-    compiled = compile_specs(Path(specs))
     _WORKER["recorder"] = UnitRecorder(compiled, options, work)
 
 
@@ -100,7 +99,7 @@ def _record(job: DemoJob) -> dict:
     return _record_with(_WORKER["recorder"], job)
 
 
-def _record_all(compiled: Compiled, specs: Path, options: Options, work: Path,
+def _record_all(compiled: Compiled, options: Options, work: Path,
                 jobs: list[DemoJob], workers: int, progress: bool) -> list[dict]:
     todo = [job for job in jobs if not (unit_path(work, job) / "demo.json").is_file()]
     bar = tqdm(total=len(jobs), initial=len(jobs) - len(todo), desc="recording", unit="demo",
@@ -118,7 +117,8 @@ def _record_all(compiled: Compiled, specs: Path, options: Options, work: Path,
                 recorder.close()
         else:
             context = multiprocessing.get_context("spawn")
-            with context.Pool(workers, _start_worker, (str(specs), options, work)) as pool:
+            # the compiled benchmark travels pickled (~50 ms), not recompiled in each worker
+            with context.Pool(workers, _start_worker, (compiled, options, work)) as pool:
                 for result in pool.imap_unordered(_record, todo, chunksize=1):
                     failed += [result] if "failed" in result else []
                     bar.update()
@@ -164,7 +164,7 @@ def _write(out: Path, options: Options, jobs: list[DemoJob], failed: list[dict],
     return GenerateResult(out, episodes, len(demos), recorded, discarded, failed)
 
 
-def generate(compiled: Compiled, specs: Path, out: Path, options: Options, workers: int = 1,
+def generate(compiled: Compiled, out: Path, options: Options, workers: int = 1,
              resume: bool = False, progress: bool = True) -> GenerateResult:
     """Record (or finish recording) the demonstrations and write the dataset."""
     began = time.perf_counter()
@@ -183,7 +183,7 @@ def generate(compiled: Compiled, specs: Path, out: Path, options: Options, worke
     jobs = demo_jobs(compiled, options.episodes_per_task, list(options.tasks),
                      options.instructions)
     done_before = sum((unit_path(work, job) / "demo.json").is_file() for job in jobs)
-    failed = _record_all(compiled, specs, options, work, jobs, workers, progress)
+    failed = _record_all(compiled, options, work, jobs, workers, progress)
     recorded = sum((unit_path(work, job) / "demo.json").is_file() for job in jobs) - done_before
     result = _write(out, options, jobs, failed, recorded, progress)
     result.seconds = time.perf_counter() - began

@@ -10,9 +10,10 @@ import numpy as np
 CODEC = "libx264"
 CODEC_NAME = "h264"  # the format the encoder writes
 PIXEL_FORMAT = "yuv420p"
-# veryfast keeps encoding well below rendering cost; a keyframe every 2 frames (as LeRobot's
-# own encoder) makes random access by training data loaders cheap.
-DATASET_OPTIONS = {"preset": "veryfast", "crf": "23", "g": "2"}
+# ultrafast keeps encoding at ~1 ms per 320x240 frame (veryfast: ~1.5 ms, 18% slower dataset
+# generation on two cores, for files about half the size); a keyframe every 2 frames (as
+# LeRobot's own encoder) makes random access by training data loaders cheap.
+DATASET_OPTIONS = {"preset": "ultrafast", "crf": "23", "g": "2"}
 
 
 class VideoEncoder:
