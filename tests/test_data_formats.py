@@ -16,13 +16,15 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+from robofollow.cli import main
 from robofollow.data import units
 from robofollow.data.check import check
 from robofollow.data.generate import WRITERS, generate
-from robofollow.data.jobs import FORMATS, demo_seed
+from robofollow.data.jobs import FORMATS, demo_seed, select_tasks
 from robofollow.data.lerobot_v30 import file_groups
 from robofollow.data.stats import aggregate, array_stats
 from robofollow.data.units import Options
+from robofollow.resources import builtin_specs
 from robofollow.sim.rollout import ExpertRunner
 from robofollow.sim.video import VideoEncoder, concatenate, frame_times, read_frames
 from tests.sim_helpers import benchmark
@@ -250,3 +252,17 @@ def test_joined_videos_keep_every_frame_in_order(tmp_path):
     joined = read_frames(tmp_path / "all.mp4")
     assert len(joined) == 16 and all(np.array_equal(a, b) for a, b in zip(joined, expected, strict=True))
     assert frame_times(tmp_path / "all.mp4") == pytest.approx([i / 25 for i in range(16)])
+
+
+def test_tasks_are_chosen_by_label_or_scene_and_a_typo_gets_suggestions(tmp_path, capsys):
+    compiled = benchmark()
+    chosen = select_tasks(compiled, ["pickup_left_cube", "scene1"])
+    scene1 = [t.label for t in compiled.spec.tasks if t.scene == "scene1"]
+    assert chosen == scene1 + ["pickup_left_cube"]  # spec order, not the order asked
+    assert select_tasks(compiled, []) == [t.label for t in compiled.spec.tasks]
+    assert main(["generate", str(builtin_specs()), "--out", str(tmp_path / "d"), "--tasks",
+                 "pickup_left_cub", "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "'pickup_left_cub' is neither a training task label nor a scene" in err
+    assert "did you mean pickup_left_cube" in err and "Traceback" not in err
+    assert not (tmp_path / "d").exists()

@@ -17,15 +17,15 @@ import pyarrow.parquet as pq
 import pytest
 
 from robofollow.cli import main
+from robofollow.compiler.behaviour import Behaviour
 from robofollow.data.check import check
 from robofollow.data.generate import GenerateError, generate
 from robofollow.data.jobs import demo_jobs, demo_seed
 from robofollow.data.units import Options
 from robofollow.oracle.score import score
+from robofollow.resources import builtin_specs
 from robofollow.sim.env import RoboFollowEnv
 from robofollow.sim.video import read_frames
-from robofollow.compiler.behaviour import Behaviour
-from robofollow.resources import builtin_specs
 from tests.sim_helpers import benchmark
 
 pytestmark = pytest.mark.slow
