@@ -111,6 +111,7 @@ def _edit_parquet(path: Path, column: str, values) -> None:
     ("missing video", "missing video episode_000001.mp4"),
     ("frame index", "frame_index is not 0, 1, ... in order"),
     ("fps", "timestamp is not frame_index / fps"),
+    ("fps", "video runs at 25 frames/s, the dataset at 30"),
     ("statistics", "observation.state mean does not match the frames"),
     ("short video", "video has 5 frames"),
     ("total", "total_frames is"),

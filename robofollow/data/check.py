@@ -199,8 +199,10 @@ def _check_stats(stats: dict, table: pa.Table, where: str, report: Report) -> No
                 report.error(where, f"{key} {name} must be 3 x 1 x 1 values in [0, 1]")
 
 
-def _check_video(path: Path, feature: dict, report: Report, where: str) -> list[float] | None:
-    """Opens, has the feature's resolution; its frame times (or None when unusable)."""
+def _check_video(path: Path, feature: dict, fps: float, report: Report,
+                 where: str) -> list[float] | None:
+    """Opens, has the feature's resolution and the dataset's frame rate; its frame times (or
+    None when unusable)."""
     if not path.is_file():
         report.error(where, f"missing video {path.name}")
         return None
@@ -208,10 +210,13 @@ def _check_video(path: Path, feature: dict, report: Report, where: str) -> list[
         with av.open(str(path)) as container:
             stream = container.streams.video[0]
             size = (stream.codec_context.height, stream.codec_context.width)
+            rate = float(stream.average_rate or 0)
         times = frame_times(path)
     except (av.FFmpegError, IndexError) as error:
         report.error(where, f"unreadable video: {error}")
         return None
+    if abs(rate - fps) > 1e-3:
+        report.error(where, f"video runs at {rate:g} frames/s, the dataset at {fps:g}")
     height, width = feature["shape"][:2]
     if size != (height + height % 2, width + width % 2):
         report.error(where, f"video is {size[1]}x{size[0]}, the feature says {width}x{height}")
@@ -274,7 +279,7 @@ def _check_v21(root: Path, info: dict, report: Report) -> None:
         for key in VIDEO_KEYS:
             video = root / info["video_path"].format(episode_chunk=chunk, video_key=key,
                                                      episode_index=index)
-            times = _check_video(video, features[key], report, f"{where} {key}")
+            times = _check_video(video, features[key], fps, report, f"{where} {key}")
             if times is not None and len(times) != length:
                 report.error(f"{where} {key}", f"video has {len(times)} frames, the episode "
                              f"{length}")
@@ -348,7 +353,8 @@ def _check_v30(root: Path, info: dict, report: Report) -> None:
                                               chunk_index=row[f"videos/{key}/chunk_index"],
                                               file_index=row[f"videos/{key}/file_index"])
             if video not in video_times:
-                video_times[video] = _check_video(root / video, features[key], report, video)
+                video_times[video] = _check_video(root / video, features[key], fps, report,
+                                                  video)
             times = video_times[video]
             if times is None:
                 continue
