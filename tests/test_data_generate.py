@@ -187,9 +187,11 @@ def test_ctrl_c_stops_the_workers_with_a_message_and_resume_finishes(tmp_path):
     out = tmp_path / "demos"
     args = [str(builtin_specs()), "--out", str(out), "--tasks", TASKS[1],
             "--episodes-per-task", "4", "--image-size", "64x48", "--workers", "2", "--quiet"]
+    # a shell's background job inherits SIGINT ignored: give the run the default disposition
     process = subprocess.Popen([sys.executable, "-m", "robofollow.cli", "generate", *args],
                                start_new_session=True, stdout=subprocess.PIPE,
-                               stderr=subprocess.PIPE, text=True)
+                               stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     units = out / ".work/units" / TASKS[1]
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline and process.poll() is None and not (
