@@ -26,6 +26,7 @@ from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES, Cameras
 from robofollow.sim.recorder import Recorder
 from robofollow.sim.simulation import CONTROL_HZ, Simulation
+from robofollow.sim.stage import Stage
 from robofollow.trajectory import Trajectory
 
 MAX_STEPS = 500  # control steps before truncation (upstream's 10 chunks x 50 actions)
@@ -52,6 +53,7 @@ class RoboFollowEnv(gym.Env):
         })
         self.action_space = spaces.Box(robot.ACTION_LOW.astype(np.float32),
                                        robot.ACTION_HIGH.astype(np.float32), dtype=np.float32)
+        self.stage = Stage(width, height)
         self.sim: Simulation | None = None
         self.cameras: Cameras | None = None
         self.recorder: Recorder | None = None
@@ -67,10 +69,8 @@ class RoboFollowEnv(gym.Env):
         episode = (options or {}).get("episode")
         self.episode = self._episode(episode) if episode else self.default_episode
         scene = self.compiled.spec.scenes[self.episode["scene"]]
-        if self.sim is None or (self.sim.scene.id, self.sim.layout) != (scene.id, self.episode["layout"]):
-            self.close()
-            self.sim = Simulation(scene, self.episode["layout"], self.width, self.height)
-            self.cameras = Cameras(self.sim, self.width, self.height)
+        self.sim = self.stage.simulation(scene, self.episode["layout"], render=True)
+        self.cameras = self.stage.cameras
         jitter_seed = self.episode["seed"] if seed is None else seed
         self.sim.reset(jitter_seed)
         self.steps, self.command = 0, robot.home_state()
@@ -110,7 +110,5 @@ class RoboFollowEnv(gym.Env):
         return self.cameras.render("cam_high") if self.cameras else None
 
     def close(self) -> None:
-        if self.cameras is not None:
-            self.cameras.close()
-            self.cameras = None
-        self.sim = None
+        self.stage.close()
+        self.sim, self.cameras = None, None

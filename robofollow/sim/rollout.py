@@ -15,10 +15,10 @@ from robofollow.compiler.spec import Scene
 from robofollow.oracle.results import EpisodeScore
 from robofollow.oracle.score import score
 from robofollow.sim import robot
-from robofollow.sim.cameras import Cameras
 from robofollow.sim.expert import Expert
 from robofollow.sim.recorder import Recorder
 from robofollow.sim.simulation import Simulation
+from robofollow.sim.stage import Stage
 from robofollow.trajectory import Trajectory
 
 META_KEYS = ("episode", "scene", "layout", "seed")
@@ -66,28 +66,14 @@ def execute(sim: Simulation, actions, meta: dict, on_frame: Callable[[], None] |
     return recorder.trajectory()
 
 
-class ExpertRunner:
-    """Runs the expert on episodes, keeping one simulation (and renderer) for the current
-    layout, so consecutive episodes on a layout reuse them. Close it (or use `with`)."""
-
-    def __init__(self, width: int = 320, height: int = 240):
-        self.width, self.height = width, height
-        self.sim: Simulation | None = None
-        self.cameras: Cameras | None = None
-
-    def _simulation(self, scene: Scene, layout: str, render: bool) -> Simulation:
-        if self.sim is None or (self.sim.scene.id, self.sim.layout) != (scene.id, layout):
-            self.close()
-            self.sim = Simulation(scene, layout, self.width, self.height)
-        if render and self.cameras is None:
-            self.cameras = Cameras(self.sim, self.width, self.height)
-        return self.sim
+class ExpertRunner(Stage):
+    """Runs the expert on episodes, reusing the current layout's simulation and renderer."""
 
     def run(self, scene: Scene, episode: dict, on_images: OnImages | None = None) -> ExpertRun:
         """Reset to the episode's layout and seed, execute the expert's plan (handing each
         frame's camera images to `on_images`, if given), and score the recording."""
         began = time.perf_counter()
-        sim = self._simulation(scene, episode["layout"], render=on_images is not None)
+        sim = self.simulation(scene, episode["layout"], render=on_images is not None)
         world = sim.reset(episode["seed"])
         behaviour = Behaviour.model_validate(episode["behaviour"])
         actions = Expert(sim).actions(plan(behaviour, world))
@@ -96,17 +82,6 @@ class ExpertRunner:
         result = score(behaviour, trajectory, scene, episode=episode["episode"])
         return ExpertRun(episode["episode"], result, len(actions), time.perf_counter() - began,
                          trajectory)
-
-    def close(self) -> None:
-        if self.cameras is not None:
-            self.cameras.close()
-        self.sim, self.cameras = None, None
-
-    def __enter__(self) -> "ExpertRunner":
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
 
 
 def run_expert(scene: Scene, episode: dict, on_images: OnImages | None = None,
