@@ -223,12 +223,13 @@ def _check_video(path: Path, feature: dict, fps: float, report: Report,
     return times
 
 
-def _check_totals(info: dict, lengths: list[int], tasks: int, report: Report) -> None:
+def _check_totals(info: dict, lengths: list[int], report: Report, tasks: int | None = None,
+                  where: str = "meta/info.json") -> None:
     report.episodes, report.frames = len(lengths), sum(lengths)
-    for key, value in (("total_episodes", len(lengths)), ("total_frames", sum(lengths)),
-                       ("total_tasks", tasks)):
+    totals = [("total_episodes", len(lengths)), ("total_frames", sum(lengths))]
+    for key, value in totals + ([("total_tasks", tasks)] if tasks is not None else []):
         if info.get(key) != value:
-            report.error("meta/info.json", f"{key} is {info.get(key)}, the dataset has {value}")
+            report.error(where, f"{key} is {info.get(key)}, the dataset has {value}")
 
 
 def _check_sequence(indices: list, where: str, what: str, report: Report) -> bool:
@@ -253,7 +254,7 @@ def _check_v21(root: Path, info: dict, report: Report) -> None:
     if not _check_sequence([e.get("episode_index") for e in episodes], "meta/episodes.jsonl",
                            "episode indices", report) or report.errors:
         return
-    _check_totals(info, [e["length"] for e in episodes], len(tasks), report)
+    _check_totals(info, [e["length"] for e in episodes], report, len(tasks))
     fps, chunk_size, start = info["fps"], info["chunks_size"], 0
     for record in episodes:
         index, length = record["episode_index"], record["length"]
@@ -315,7 +316,7 @@ def _check_v30(root: Path, info: dict, report: Report) -> None:
     if not _check_sequence([r["episode_index"] for r in rows], "meta/episodes",
                            "episode indices", report) or report.errors:
         return
-    _check_totals(info, [r["length"] for r in rows], len(tasks), report)
+    _check_totals(info, [r["length"] for r in rows], report, len(tasks))
     fps, data_files, video_times = info["fps"], {}, {}
     start = 0
     for row in rows:
@@ -400,7 +401,4 @@ def _check_hdf5(root: Path, info: dict, report: Report) -> None:
                     report.error(where, "instructions differ from episodes.jsonl")
         except (OSError, KeyError) as error:
             report.error(where, f"cannot read {record['file']}: {error}")
-    report.episodes, report.frames = len(lengths), sum(lengths)
-    for key, value in (("total_episodes", len(lengths)), ("total_frames", sum(lengths))):
-        if info.get(key) != value:
-            report.error("info.json", f"{key} is {info.get(key)}, the dataset has {value}")
+    _check_totals(info, lengths, report, where="info.json")
