@@ -1,0 +1,1 @@
+"""Evaluating policies over the benchmark: the policy interface, reference policies, episodes."""

@@ -1,0 +1,90 @@
+"""One evaluation episode, as upstream's protocol: reset the episode's layout with its seed,
+then query the policy for action chunks and execute them (at most CHUNK_LIMIT actions of each)
+until the fixed action budget is spent; nothing ends an episode early except a policy failure
+(an exception or invalid actions), which is recorded. The recording is scored by the oracle."""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from robofollow.build import Compiled
+from robofollow.eval.policy import BadActionError, Policy, Privileged, validate_actions
+from robofollow.oracle.results import EpisodeScore
+from robofollow.scoring import score_recording
+from robofollow.sim import robot
+from robofollow.sim.recorder import Recorder
+from robofollow.sim.stage import Stage
+from robofollow.trajectory import Trajectory
+
+ACTION_BUDGET = 500  # control steps per episode (upstream: 10 chunks x 50 actions)
+CHUNK_LIMIT = 50  # actions executed from each chunk before the policy is asked again
+
+
+@dataclass
+class EpisodeRun:
+    score: EpisodeScore
+    trajectory: Trajectory
+    steps: int  # control steps executed
+    queries: int  # policy calls
+    error: str | None  # why the policy stopped early, if it did
+    seconds: float
+
+
+def observation(policy: Policy, stage: Stage, instruction: str, steps: int,
+                privileged: Privileged | None) -> dict:
+    """What the policy sees now: only the parts it uses are computed (images are rendered)."""
+    sim = stage.sim
+    obs = {"state": robot.observed_state(sim.state()), "instruction": instruction,
+           "step": steps}
+    if "images" in policy.uses:
+        obs["images"] = stage.cameras.images()
+    if privileged is not None:
+        obs["privileged"] = privileged
+    return obs
+
+
+def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy,
+                instruction: str | None = None, budget: int = ACTION_BUDGET,
+                on_frame=None) -> EpisodeRun:
+    """Evaluate `policy` on a compiled episode. `instruction` replaces the episode's (the
+    empty and shuffled controls); `on_frame(stage)` is called after every recorded frame."""
+    began = time.perf_counter()
+    scene = compiled.spec.scenes[episode["scene"]]
+    render = "images" in policy.uses or on_frame is not None
+    sim = stage.simulation(scene, episode["layout"], render=render)
+    world = sim.reset(episode["seed"])
+    recorder = Recorder(sim, {k: episode[k] for k in ("episode", "scene", "layout", "seed")})
+
+    def record(action: np.ndarray) -> None:
+        recorder.frame(action)
+        if on_frame is not None:
+            on_frame(stage)
+
+    record(robot.home_state())
+    privileged = (Privileged(sim, world, scene, compiled.candidates(scene.id), episode["seed"])
+                  if "privileged" in policy.uses else None)
+    text = episode["instruction"] if instruction is None else instruction
+    policy.reset()
+    steps = queries = 0
+    error = None
+    while steps < budget:
+        queries += 1
+        try:
+            chunk = validate_actions(policy.act(observation(policy, stage, text, steps,
+                                                            privileged)))
+        except BadActionError as bad:
+            error = f"step {steps}: {bad}"
+            break
+        except Exception as failure:  # a policy bug ends its episode, not the evaluation
+            error = f"step {steps}: the policy raised {type(failure).__name__}: {failure}"
+            break
+        for action in chunk[:min(CHUNK_LIMIT, budget - steps)]:
+            sim.step(action)
+            record(action)
+            steps += 1
+    trajectory = recorder.trajectory()
+    result = score_recording(compiled, episode, trajectory)
+    return EpisodeRun(result, trajectory, steps, queries, error, time.perf_counter() - began)

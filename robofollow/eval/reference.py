@@ -1,0 +1,121 @@
+"""Reference policies: the bounds a real policy is read against.
+
+expert  perfect understanding and execution: parses the instruction it is given, grounds it on
+        the current layout (privileged object poses) and executes the expert's plan. It uses no
+        episode metadata, so given another task's instruction it performs that one perfectly.
+blind   the language-blind control: ignores the instruction and performs, uniformly at random
+        (seeded by the episode), one of the scene's training behaviours that the current
+        layout allows; its Intent is the chance level.
+noop    holds the arms at home.
+random  random joint-space motion around home (seeded by the episode).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.grounding import ground
+from robofollow.compiler.parser import parse
+from robofollow.compiler.plans import plan
+from robofollow.compiler.world import World
+from robofollow.errors import RoboFollowError
+from robofollow.eval.policy import Privileged
+from robofollow.sim import robot
+from robofollow.sim.expert import Expert
+
+CHUNK = 50  # actions returned per call, as upstream's action chunks
+RANDOM_REACH = 0.5  # rad: the random policy's targets lie this far around home at most
+RANDOM_MOVE_STEPS = 25  # control steps per random motion
+
+
+class _Scripted:
+    """Plays a precomputed action sequence in chunks, then holds the last target."""
+    uses = frozenset({"privileged"})
+
+    def __init__(self):
+        self.actions: np.ndarray | None = None
+        self.cursor = 0
+
+    def reset(self) -> None:
+        self.actions, self.cursor = None, 0
+
+    def act(self, observation: dict) -> np.ndarray:
+        if self.actions is None:
+            self.actions = self.script(observation)
+        chunk = self.actions[self.cursor:self.cursor + CHUNK]
+        self.cursor += len(chunk)
+        return chunk if len(chunk) else self.actions[-1:]
+
+    def script(self, observation: dict) -> np.ndarray:
+        raise NotImplementedError
+
+
+def _perform(behaviour: Behaviour, privileged: Privileged) -> np.ndarray:
+    return Expert(privileged.sim).actions(plan(behaviour, privileged.world))
+
+
+def _hold() -> np.ndarray:
+    return robot.home_state()[None]
+
+
+class ExpertPolicy(_Scripted):
+    uses = frozenset({"instruction", "privileged"})
+
+    def script(self, observation: dict) -> np.ndarray:
+        privileged = observation["privileged"]
+        try:
+            behaviour = ground(parse(observation["instruction"]), privileged.world)
+        except RoboFollowError:  # not an instruction it understands here: it stays at home
+            return _hold()
+        return _perform(behaviour, privileged)
+
+
+def available_behaviours(world: World, training: dict[str, Behaviour]) -> list[str]:
+    """Labels of the training behaviours whose objects the layout has, in order."""
+    placed = set(world.poses)
+    return [label for label, behaviour in training.items()
+            if all({s.source, s.target, *(body for _, body in s.waypoints)} - {None} <= placed
+                   for s in behaviour.steps)]
+
+
+class BlindPolicy(_Scripted):
+    def script(self, observation: dict) -> np.ndarray:
+        privileged = observation["privileged"]
+        labels = available_behaviours(privileged.world, privileged.training)
+        if not labels:
+            return _hold()
+        label = labels[int(np.random.default_rng(privileged.seed).integers(len(labels)))]
+        try:
+            return _perform(privileged.training[label], privileged)
+        except RoboFollowError:
+            return _hold()
+
+
+class NoopPolicy:
+    uses = frozenset()
+
+    def reset(self) -> None:
+        pass
+
+    def act(self, observation: dict) -> np.ndarray:
+        return np.repeat(_hold(), CHUNK, axis=0)
+
+
+class RandomPolicy(_Scripted):
+    def script(self, observation: dict) -> np.ndarray:
+        rng = np.random.default_rng(observation["privileged"].seed)
+        low, high = robot.ACTION_LOW, robot.ACTION_HIGH
+        home = robot.home_state()
+        current, actions = home, []
+        for _ in range(CHUNK * 10 // RANDOM_MOVE_STEPS):
+            target = np.clip(home + rng.uniform(-RANDOM_REACH, RANDOM_REACH, home.shape),
+                             low, high)
+            target[[6, 13]] = rng.integers(0, 2, 2)  # grippers open or closed
+            actions += list(np.linspace(current, target, RANDOM_MOVE_STEPS + 1)[1:])
+            current = target
+        return np.array(actions)
+
+
+REFERENCE_POLICIES = {"expert": ExpertPolicy, "blind": BlindPolicy, "noop": NoopPolicy,
+                      "random": RandomPolicy}

@@ -1,0 +1,126 @@
+"""The policy interface and the reference policies, one episode at a time."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from robofollow.eval.episode import ACTION_BUDGET, CHUNK_LIMIT, run_episode
+from robofollow.eval.policy import BadActionError, validate_actions
+from robofollow.eval.reference import REFERENCE_POLICIES, BlindPolicy, available_behaviours
+from robofollow.sim import robot
+from robofollow.sim.stage import Stage
+from tests.sim_helpers import benchmark, episode
+
+
+@pytest.fixture(scope="module")
+def stage():
+    with Stage() as shared:
+        yield shared
+
+
+def test_valid_chunks_pass_and_a_single_action_is_a_chunk_of_one():
+    home = robot.home_state()
+    assert validate_actions(home).shape == (1, 14)
+    nudged = home.copy()
+    nudged[6] = 1.0005  # within the slack: clipped to the limit
+    assert validate_actions([home, nudged])[1, 6] == 1.0
+
+
+@pytest.mark.parametrize("actions, message", [
+    (np.zeros((3, 7)), r"\[T, 14\] with T >= 1, got shape \[3, 7\]"),
+    (np.zeros((0, 14)), r"got shape \[0, 14\]"),
+    ([[np.nan] * 14], "action 0 has a non-finite value at left_joint_0"),
+    ("go", "actions are not numbers"),
+])
+def test_invalid_chunks_say_what_is_wrong(actions, message):
+    with pytest.raises(BadActionError, match=message):
+        validate_actions(actions)
+
+
+def test_a_joint_past_its_limit_is_named():
+    action = robot.home_state()
+    action[8] = 2.5  # right_joint_1, limit 1.2566
+    with pytest.raises(BadActionError, match=r"action 0: right_joint_1 = 2.5000 is outside"):
+        validate_actions(action)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("episode_id", [
+    "scene1/L0/pickup_yellow_block_2#r1",
+    "scene2/L0/pickup_left_cube#r1",
+    "scene3/L0/r_pick2_via4_to6_long_front#r1",
+])
+def test_the_expert_policy_reads_the_instruction_and_scores_in_full(stage, episode_id):
+    run = run_episode(benchmark(), stage, episode(episode_id), REFERENCE_POLICIES["expert"]())
+    assert run.error is None and run.steps == ACTION_BUDGET
+    assert run.score.complete and run.score.intent_score == run.score.execution_score == 1.0
+
+
+@pytest.mark.slow
+def test_given_another_tasks_instruction_the_expert_performs_that_task(stage):
+    record = episode("scene2/L0/pickup_left_cube#r1")
+    other = episode("scene2/L0/pickup_right_cube#r1")
+    run = run_episode(benchmark(), stage, record, REFERENCE_POLICIES["expert"](),
+                      instruction=other["instruction"])
+    assert run.score.intent_score == 0.0 and not run.score.complete
+    assert run.score.executed_behaviour.match == "pickup_right_cube"
+
+
+@pytest.mark.slow
+def test_noop_spends_the_budget_in_chunks_and_scores_nothing(stage):
+    run = run_episode(benchmark(), stage, episode("scene1/L0/pickup_yellow_block_2#r1"),
+                      REFERENCE_POLICIES["noop"]())
+    assert (run.steps, run.queries) == (ACTION_BUDGET, ACTION_BUDGET // CHUNK_LIMIT)
+    assert run.score.intent_score == run.score.execution_score == 0.0
+
+
+@pytest.mark.slow
+def test_blind_performs_one_available_training_behaviour_chosen_by_the_seed(stage):
+    record = episode("scene2/L0/pickup_left_cube#r1")
+    first = run_episode(benchmark(), stage, record, BlindPolicy())
+    again = run_episode(benchmark(), stage, record, BlindPolicy())
+    np.testing.assert_array_equal(first.trajectory.action, again.trajectory.action)
+    match = first.score.executed_behaviour.match
+    labels = available_behaviours(stage.sim.start_world, benchmark().candidates("scene2"))
+    assert match in labels and first.score.executed_behaviour.intent_score == 1.0
+
+
+class _Raises:
+    uses = frozenset({"state"})
+
+    def reset(self):
+        self.calls = 0
+
+    def act(self, observation):
+        self.calls += 1
+        if self.calls == 3:
+            raise RuntimeError("model crashed")
+        return np.repeat(observation["state"][None], 50, axis=0)
+
+
+class _Returns:
+    uses = frozenset({"state"})
+
+    def __init__(self, value):
+        self.value = value
+
+    def reset(self):
+        pass
+
+    def act(self, observation):
+        return self.value
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("policy, steps, message", [
+    (_Raises(), 100, "step 100: the policy raised RuntimeError: model crashed"),
+    (_Returns(np.full((5, 14), np.nan)), 0, "step 0: action 0 has a non-finite value"),
+    (_Returns(np.zeros((5, 12))), 0, "step 0: actions must be [T, 14]"),
+])
+def test_a_failing_policy_ends_its_episode_with_the_reason_and_is_scored(stage, policy,
+                                                                         steps, message):
+    run = run_episode(benchmark(), stage, episode("scene1/L0/pickup_yellow_block_2#r1"),
+                      policy)
+    assert run.steps == steps and run.error.startswith(message)
+    assert run.score.intent_score == 0.0
