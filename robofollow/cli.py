@@ -14,6 +14,7 @@ from robofollow.compiler import lf
 from robofollow.compiler.notation import notation
 from robofollow.compiler.parser import parse
 from robofollow.compiler.realize import STYLES, realize
+from robofollow.compiler.spec import LEVELS
 from robofollow.data.jobs import FORMATS, INSTRUCTION_MODES
 from robofollow.errors import InstructionError, RoboFollowError
 
@@ -229,6 +230,37 @@ def cmd_dataset_check(args) -> int:
     return 0 if report.ok else 1
 
 
+def cmd_eval(args) -> int:
+    from robofollow.build import compile_specs
+    from robofollow.eval.runner import EvalOptions, evaluate
+    from robofollow.eval.tables import table_text
+
+    compiled = compile_specs(Path(args.specs))
+    scenes = _names(args.scenes, list(compiled.spec.scenes), "scene")
+    levels = _names(args.levels, list(LEVELS), "level")
+    options = EvalOptions(args.policy, tuple(scenes), tuple(levels), args.rounds,
+                          args.instruction_mode, args.video, compiled.spec.digest)
+    try:
+        result = evaluate(compiled, Path(args.out), options, args.workers, args.resume,
+                          progress=not args.quiet)
+    except KeyboardInterrupt:
+        print(f"\ninterrupted: the finished episodes are kept in {args.out}; run the same "
+              "command with --resume to continue", file=sys.stderr)
+        return 130
+    print(f"{args.policy} ({args.instruction_mode} instructions), {args.out}:")
+    print(table_text(result))
+    return 0
+
+
+def _names(text: str | None, known: list[str], what: str) -> list[str]:
+    """A comma-separated selection of known names (all of them when empty)."""
+    chosen = [n.strip() for n in (text or "").split(",") if n.strip()] or known
+    unknown = [n for n in chosen if n not in known]
+    if unknown:
+        raise RoboFollowError(f"unknown {what} {', '.join(unknown)}; known: {', '.join(known)}")
+    return [n for n in known if n in chosen]
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="robofollow",
@@ -321,6 +353,36 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--image-size", type=_size, default=(640, 480), metavar="WxH",
                    help="size of each of the two views (default: 640x480)")
     p.set_defaults(handler=cmd_render)
+    p = commands.add_parser(
+        "eval", help="evaluate a policy over L0-L3: the paper's Table 1",
+        description="Run a policy on the compiled episodes (fixed action budget, chunks of at "
+                    "most 50 actions, the tasks' seeds), score every episode with the oracle, "
+                    "append the results to RUN/episodes.jsonl and write RUN/summary.json; "
+                    "prints IS / ES / CR per scene and level. Interrupted runs continue with "
+                    "--resume.",
+        epilog="examples:\n  robofollow eval --policy expert --out runs/expert\n  robofollow "
+               "eval --policy blind --out runs/blind --levels L0,L1 --rounds 2\n  robofollow "
+               "eval --policy mypkg.policies:make --out runs/mine",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--policy", required=True,
+                   help="expert, blind, noop, random, or module:factory")
+    p.add_argument("--out", required=True, metavar="RUN", help="run folder")
+    p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
+    p.add_argument("--scenes", metavar="LIST", help="comma-separated scenes (default: all)")
+    p.add_argument("--levels", metavar="LIST", help="comma-separated levels (default: all)")
+    p.add_argument("--rounds", type=_positive, default=10, metavar="N",
+                   help="rounds per task, each with its own seed (default: 10)")
+    p.add_argument("--workers", type=_positive, default=os.cpu_count() or 1, metavar="N",
+                   help="worker processes (default: the number of CPUs)")
+    p.add_argument("--instruction-mode", choices=("normal", "empty", "shuffled"),
+                   default="normal", help="the episode's instruction, none, or another "
+                                          "task's (default: normal)")
+    p.add_argument("--video", choices=("none", "failures", "all"), default="none",
+                   help="write mp4s of these episodes to RUN/videos (default: none)")
+    p.add_argument("--resume", action="store_true", help="continue an interrupted run")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(handler=cmd_eval)
+
     p = commands.add_parser(
         "generate", help="record expert demonstrations of the training tasks as a dataset",
         description="Run the scripted expert on every training task (seeds fixed per task and "

@@ -1,0 +1,39 @@
+"""Turning a --policy argument into a policy: a reference policy's name or `module:factory`
+(a callable returning a policy, imported from the Python path)."""
+
+from __future__ import annotations
+
+import importlib
+
+from robofollow.errors import RoboFollowError
+from robofollow.eval.policy import OBSERVATION_PARTS, Policy
+from robofollow.eval.reference import REFERENCE_POLICIES
+
+
+class PolicyLoadError(RoboFollowError):
+    """A --policy that names nothing usable."""
+
+
+def load_policy(spec: str) -> Policy:
+    if spec in REFERENCE_POLICIES:
+        return REFERENCE_POLICIES[spec]()
+    module_name, _, factory_name = spec.partition(":")
+    if not module_name or not factory_name:
+        raise PolicyLoadError(f"--policy {spec!r}: expected one of "
+                              f"{', '.join(REFERENCE_POLICIES)} or module:factory")
+    try:
+        module = importlib.import_module(module_name)
+    except ImportError as error:
+        raise PolicyLoadError(f"--policy {spec!r}: cannot import {module_name}: {error}") from None
+    factory = getattr(module, factory_name, None)
+    if not callable(factory):
+        raise PolicyLoadError(f"--policy {spec!r}: {module_name} has no callable "
+                              f"{factory_name!r}")
+    policy = factory()
+    missing = [name for name in ("reset", "act") if not callable(getattr(policy, name, None))]
+    uses = getattr(policy, "uses", None)
+    if missing or not isinstance(uses, frozenset | set) or not set(uses) <= OBSERVATION_PARTS:
+        raise PolicyLoadError(
+            f"--policy {spec!r}: the factory's object is not a policy (it needs reset(), "
+            f"act(observation) and uses, a set of {sorted(OBSERVATION_PARTS)})")
+    return policy
