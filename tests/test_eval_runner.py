@@ -1,0 +1,144 @@
+"""`robofollow eval`: results per episode, the summary, resuming, policy loading and the
+instruction controls."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from robofollow.cli import main
+from robofollow.eval.instructions import given_instruction
+from robofollow.eval.loading import PolicyLoadError, load_policy
+from robofollow.eval.runner import EvalOptions, EvalRunError, evaluate, read_results
+from robofollow.resources import builtin_specs
+from tests.sim_helpers import benchmark, episode
+
+SCENE, LEVEL = "scene1", "L0"  # 16 tasks: one round is 16 episodes
+
+
+def _options(policy: str = "expert", **changes) -> EvalOptions:
+    fields = {"policy": policy, "scenes": (SCENE,), "levels": (LEVEL,), "rounds": 1,
+              "instruction_mode": "normal", "video": "none",
+              "spec_digest": benchmark().spec.digest}
+    return EvalOptions(**{**fields, **changes})
+
+
+@pytest.fixture(scope="module")
+def expert_run(tmp_path_factory) -> Path:
+    out = tmp_path_factory.mktemp("eval") / "expert"
+    evaluate(benchmark(), out, _options(), progress=False)
+    return out
+
+
+@pytest.mark.slow
+def test_the_expert_run_records_every_episode_and_scores_in_full(expert_run):
+    results = read_results(expert_run / "episodes.jsonl")
+    assert len(results) == len({r["episode"] for r in results}) == 16
+    summary = json.loads((expert_run / "summary.json").read_text())
+    assert summary["cells"][SCENE][LEVEL] | {"CR_micro": 0} == {
+        "IS": 100.0, "ES": 100.0, "CR": 100.0, "CR_micro": 0, "episodes": 16, "tasks": 16}
+    assert summary["avg"] == {"IS": 100.0, "ES": 100.0, "CR": 100.0}
+    record = results[0]
+    assert record["steps"] == 500 and record["error"] is None
+    assert record["instruction"] == episode(record["episode"])["instruction"]
+    first = record["stages"][0]
+    assert first["intent"] == first["execution"] == first["weight"] and set(record["hashes"]) == {
+        "episode", "instruction", "initial_state"}
+
+
+@pytest.mark.slow
+def test_a_killed_run_resumes_with_every_episode_once_and_the_same_summary(expert_run,
+                                                                          tmp_path):
+    out = tmp_path / "broken"
+    args = ["eval", "--policy", "expert", "--out", str(out), "--specs", str(builtin_specs()),
+            "--scenes", SCENE, "--levels", LEVEL, "--rounds", "1", "--workers", "1", "--quiet"]
+    process = subprocess.Popen([sys.executable, "-m", "robofollow.cli", *args],
+                               start_new_session=True, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL)
+    results = out / "episodes.jsonl"
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline and process.poll() is None and (
+            not results.exists() or results.read_text().count("\n") < 3):
+        time.sleep(0.05)
+    os.killpg(process.pid, signal.SIGKILL)
+    process.wait()
+    kept = read_results(results)
+    assert 3 <= len(kept) < 16
+    with open(results, "a") as f:  # a line the kill cut short
+        f.write('{"episode": "scene1/L0/cut')
+    assert main(args) == 1  # the folder holds a run: --resume is needed
+    assert main(args + ["--resume"]) == 0
+    again = read_results(results)
+    assert sorted(r["episode"] for r in again) == sorted(
+        r["episode"] for r in read_results(expert_run / "episodes.jsonl"))
+    assert again[:len(kept)] == kept
+    assert (out / "summary.json").read_text() == (expert_run / "summary.json").read_text()
+
+
+def test_a_run_folder_is_not_reused_with_other_options(tmp_path):
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "run.json").write_text(json.dumps(_options().to_json()))
+    with pytest.raises(EvalRunError, match="rounds differ"):
+        evaluate(benchmark(), out, _options(rounds=2), resume=True, progress=False)
+    with pytest.raises(EvalRunError, match="already holds a run"):
+        evaluate(benchmark(), out, _options(), progress=False)
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "mine.txt").write_text("x")
+    with pytest.raises(EvalRunError, match="not empty and holds no run"):
+        evaluate(benchmark(), other, _options(), progress=False)
+
+
+class Holder:
+    uses = frozenset({"state"})
+
+    def reset(self):
+        pass
+
+    def act(self, observation):
+        return observation["state"][None]
+
+
+def make_holder():
+    return Holder()
+
+
+def not_a_policy():
+    return object()
+
+
+def test_policies_load_by_name_or_module_factory_with_clear_errors():
+    assert type(load_policy("noop")).__name__ == "NoopPolicy"
+    assert isinstance(load_policy("tests.test_eval_runner:make_holder"), Holder)
+    for spec, message in (("tests.test_eval_runner:missing", "has no callable 'missing'"),
+                          ("no_such_module_xyz:f", "cannot import no_such_module_xyz"),
+                          ("tests.test_eval_runner:not_a_policy", "is not a policy"),
+                          ("gpt", "expected one of expert, blind, noop, random")):
+        with pytest.raises(PolicyLoadError, match=message):
+            load_policy(spec)
+
+
+def test_the_instruction_controls():
+    record = episode("scene2/L0/pickup_left_cube#r1")
+    compiled = benchmark()
+    assert given_instruction(compiled, record, "normal") == record["instruction"]
+    assert given_instruction(compiled, record, "empty") == ""
+    shuffled = given_instruction(compiled, record, "shuffled")
+    assert shuffled == given_instruction(compiled, record, "shuffled")  # seeded
+    paraphrases = {p for t in compiled.spec.scenes["scene2"].tasks for p in t.paraphrases}
+    own = next(t for t in compiled.spec.tasks if t.label == "pickup_left_cube").paraphrases
+    assert shuffled in paraphrases and shuffled not in own
+
+
+def test_eval_rejects_unknown_scenes_and_levels(capsys, tmp_path):
+    assert main(["eval", "--policy", "noop", "--out", str(tmp_path / "r"), "--specs",
+                 str(builtin_specs()), "--levels", "L9"]) == 1
+    assert "unknown level L9; known: L0, L1, L2, L3" in capsys.readouterr().err
