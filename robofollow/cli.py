@@ -261,6 +261,19 @@ def _names(text: str | None, known: list[str], what: str) -> list[str]:
     return [n for n in known if n in chosen]
 
 
+def cmd_serve(args) -> int:
+    from robofollow.build import compile_specs
+    from robofollow.eval.websocket import PolicyServer
+
+    server = PolicyServer(compile_specs(Path(args.specs)), args.policy)
+    print(f"serving {args.policy} on ws://{args.host}:{args.port} (Ctrl-C stops)", flush=True)
+    try:
+        server.serve_forever(args.host, args.port)
+    except KeyboardInterrupt:
+        return 0
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="robofollow",
@@ -365,7 +378,7 @@ def build_parser() -> argparse.ArgumentParser:
                "eval --policy mypkg.policies:make --out runs/mine",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--policy", required=True,
-                   help="expert, blind, noop, random, or module:factory")
+                   help="expert, blind, noop, random, module:factory or ws://HOST:PORT")
     p.add_argument("--out", required=True, metavar="RUN", help="run folder")
     p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
     p.add_argument("--scenes", metavar="LIST", help="comma-separated scenes (default: all)")
@@ -382,6 +395,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resume", action="store_true", help="continue an interrupted run")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(handler=cmd_eval)
+
+    p = commands.add_parser(
+        "serve", help="serve a Python policy over openpi's websocket protocol",
+        description="Expose a policy (a reference policy or module:factory) as a websocket "
+                    "server speaking openpi's protocol (msgpack-numpy, metadata on connect, "
+                    "replies {'actions': [H, 14]}), for `robofollow eval --policy ws://HOST:PORT`"
+                    " or any openpi client.")
+    p.add_argument("--policy", required=True, help="expert, blind, noop, random, or "
+                                                    "module:factory")
+    p.add_argument("--host", default="0.0.0.0", help="address to listen on (default: 0.0.0.0)")
+    p.add_argument("--port", type=_positive, default=8000, help="port (default: 8000)")
+    p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
+    p.set_defaults(handler=cmd_serve)
 
     p = commands.add_parser(
         "generate", help="record expert demonstrations of the training tasks as a dataset",

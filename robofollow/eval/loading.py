@@ -1,5 +1,6 @@
-"""Turning a --policy argument into a policy: a reference policy's name or `module:factory`
-(a callable returning a policy, imported from the Python path)."""
+"""Turning a --policy argument into a policy: a reference policy's name, `module:factory`
+(a callable returning a policy, imported from the Python path) or `ws://host:port` (a server
+speaking openpi's websocket protocol)."""
 
 from __future__ import annotations
 
@@ -17,10 +18,16 @@ class PolicyLoadError(RoboFollowError):
 def load_policy(spec: str) -> Policy:
     if spec in REFERENCE_POLICIES:
         return REFERENCE_POLICIES[spec]()
+    if spec.startswith(("ws://", "wss://")):
+        from robofollow.eval.websocket import (
+            WebsocketPolicy,  # (it serves loaded policies)
+        )
+
+        return WebsocketPolicy(spec)
     module_name, _, factory_name = spec.partition(":")
     if not module_name or not factory_name:
         raise PolicyLoadError(f"--policy {spec!r}: expected one of "
-                              f"{', '.join(REFERENCE_POLICIES)} or module:factory")
+                              f"{', '.join(REFERENCE_POLICIES)}, module:factory or ws://host:port")
     try:
         module = importlib.import_module(module_name)
     except ImportError as error:
