@@ -48,7 +48,8 @@ class WebsocketPolicy:
         self.connection = None
         self.metadata = self._connect()
         declared = self.metadata.get("robofollow", {}).get("uses")
-        self.uses = frozenset(declared) & OBSERVATION_PARTS if declared else OPENPI_USES
+        self.uses = (frozenset(declared) & OBSERVATION_PARTS if declared is not None
+                     else OPENPI_USES)
 
     def _connect(self) -> dict:
         self.close()
