@@ -12,8 +12,9 @@ import pytest
 from websockets.sync.server import serve
 
 from robofollow.eval.episode import run_episode
+from robofollow.eval.policy import PolicyConnectionError
 from robofollow.eval.reference import ExpertPolicy
-from robofollow.eval.websocket import PolicyConnectionError, PolicyServer, WebsocketPolicy
+from robofollow.eval.websocket import PolicyServer, WebsocketPolicy
 from robofollow.eval.wire import packb, unpackb
 from robofollow.sim import robot
 from robofollow.sim.stage import Stage

@@ -1,6 +1,6 @@
 """Turning a --policy argument into a policy: a reference policy's name, `module:factory`
-(a callable returning a policy, imported from the Python path) or `ws://host:port` (a server
-speaking openpi's websocket protocol)."""
+(a callable returning a policy, imported from the Python path), `ws://host:port` (a server
+speaking openpi's websocket protocol) or `tcp://host:port` (upstream RoboFollow's protocol)."""
 
 from __future__ import annotations
 
@@ -24,10 +24,18 @@ def load_policy(spec: str) -> Policy:
         )
 
         return WebsocketPolicy(spec)
+    if spec.startswith("tcp://"):
+        from robofollow.eval.tcp import TcpPolicy
+
+        host, _, port = spec.removeprefix("tcp://").rpartition(":")
+        if not host or not port.isdigit():
+            raise PolicyLoadError(f"--policy {spec!r}: expected tcp://HOST:PORT")
+        return TcpPolicy(host, int(port))
     module_name, _, factory_name = spec.partition(":")
     if not module_name or not factory_name:
         raise PolicyLoadError(f"--policy {spec!r}: expected one of "
-                              f"{', '.join(REFERENCE_POLICIES)}, module:factory or ws://host:port")
+                              f"{', '.join(REFERENCE_POLICIES)}, module:factory, ws://host:port or "
+                              "tcp://host:port")
     try:
         module = importlib.import_module(module_name)
     except ImportError as error:

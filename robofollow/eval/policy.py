@@ -51,6 +51,10 @@ class Privileged:
     seed: int  # the episode's seed, for policies that draw at random
 
 
+class PolicyConnectionError(RoboFollowError):
+    """A policy server could not be reached or did not answer, after the retries."""
+
+
 class BadActionError(RoboFollowError):
     """A policy returned something that is not a chunk of valid joint targets."""
 

@@ -28,16 +28,12 @@ from websockets.sync.server import serve
 from robofollow.build import Compiled
 from robofollow.errors import RoboFollowError
 from robofollow.eval.loading import load_policy
-from robofollow.eval.policy import OBSERVATION_PARTS, Privileged
+from robofollow.eval.policy import OBSERVATION_PARTS, PolicyConnectionError, Privileged
 from robofollow.eval.wire import packb, unpackb
 from robofollow.sim.cameras import CAMERA_NAMES
 from robofollow.sim.stage import Stage
 
 OPENPI_USES = frozenset({"state", "instruction", "images"})
-
-
-class PolicyConnectionError(RoboFollowError):
-    """The policy server could not be reached or did not answer, after the retries."""
 
 
 class WebsocketPolicy:
