@@ -232,6 +232,7 @@ def cmd_dataset_check(args) -> int:
 
 def cmd_eval(args) -> int:
     from robofollow.build import compile_specs
+    from robofollow.eval.report import write_report
     from robofollow.eval.runner import EvalOptions, evaluate
     from robofollow.eval.tables import table_text
 
@@ -247,8 +248,29 @@ def cmd_eval(args) -> int:
         print(f"\ninterrupted: the finished episodes are kept in {args.out}; run the same "
               "command with --resume to continue", file=sys.stderr)
         return 130
+    markdown, _ = write_report(Path(args.out))
     print(f"{args.policy} ({args.instruction_mode} instructions), {args.out}:")
     print(table_text(result))
+    print(f"report: {markdown} (and .html)")
+    return 0
+
+
+def cmd_report(args) -> int:
+    from robofollow.eval.report import comparison, write_report
+
+    runs = [Path(run) for run in args.runs]
+    if len(runs) > 2:
+        raise RoboFollowError("report takes one run, or two to compare")
+    if len(runs) == 1:
+        markdown, html = write_report(runs[0])
+        print(f"wrote {markdown} and {html}")
+        return 0
+    text = comparison(runs)
+    if args.out:
+        Path(args.out).write_text(text, encoding="utf-8")
+        print(f"wrote {args.out}")
+    else:
+        print(text)
     return 0
 
 
@@ -395,6 +417,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--resume", action="store_true", help="continue an interrupted run")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(handler=cmd_eval)
+
+    p = commands.add_parser(
+        "report", help="rebuild a run's report, or compare two runs",
+        description="With one RUN: rebuild RUN/report.md and RUN/report.html from its results. "
+                    "With two: their Table 1 cells side by side with the differences "
+                    "(markdown, printed or written to --out).")
+    p.add_argument("runs", nargs="+", metavar="RUN", help="one or two run folders")
+    p.add_argument("--out", metavar="FILE.md", help="write the comparison here")
+    p.set_defaults(handler=cmd_report)
 
     p = commands.add_parser(
         "serve", help="serve a Python policy over openpi's websocket protocol",

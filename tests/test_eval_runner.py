@@ -80,6 +80,7 @@ def test_a_killed_run_resumes_with_every_episode_once_and_the_same_summary(exper
         r["episode"] for r in read_results(expert_run / "episodes.jsonl"))
     assert again[:len(kept)] == kept
     assert (out / "summary.json").read_text() == (expert_run / "summary.json").read_text()
+    assert "| scene1 | 100.0 | 100.0 | 100.0 |" in (out / "report.md").read_text()
 
 
 def test_a_run_folder_is_not_reused_with_other_options(tmp_path):

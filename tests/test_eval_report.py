@@ -1,0 +1,94 @@
+"""Run reports and comparisons, from hand-made result records."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from robofollow.cli import main
+from robofollow.eval.report import ReportError, comparison, report_data, write_report
+from robofollow.eval.runner import EvalOptions
+
+OPTIONS = EvalOptions("mine:make", ("scene2",), ("L0", "L1"), 1, "normal", "none", "0" * 64)
+
+
+def _record(task: str, level: str, intent: float, execution: float, complete: bool,
+            match: str | None, reason: str = "", error: str | None = None) -> dict:
+    stages = [{"stage": "source", "name": "source_grounding", "weight": 0.8,
+               "intent": 0.8 * intent, "execution": 0.8 * execution, "first_step": None,
+               "reason": reason},
+              {"stage": "finish", "name": "finish", "weight": 0.2, "intent": 0.2 * intent,
+               "execution": 0.2 * execution, "first_step": None, "reason": ""}]
+    return {"episode": f"scene2/{level}/{task}#r1", "scene": "scene2", "level": level,
+            "task": f"scene2/{level}/{task}", "intent_score": intent,
+            "execution_score": execution, "complete": complete, "stages": stages,
+            "executed_behaviour": {"match": match, "description": "", "behaviour": None,
+                                   "intent_score": 0, "execution_score": 0},
+            "error": error}
+
+
+RESULTS = [
+    _record("pickup_left_cube", "L0", 1.0, 1.0, True, "instructed"),
+    _record("pickup_right_cube", "L0", 1.0, 0.0, False, None, "the cube slipped"),
+    _record("pickup_right_cube", "L1", 0.0, 0.0, False, "pickup_left_cube",
+            "the left arm first closed on large_blue_cube"),
+    _record("push_left_cube", "L1", 0.0, 0.0, False, None, "never closed",
+            error="step 50: the policy raised RuntimeError: boom"),
+]
+
+
+@pytest.fixture
+def run(tmp_path) -> Path:
+    folder = tmp_path / "mine"
+    folder.mkdir()
+    (folder / "run.json").write_text(json.dumps(OPTIONS.to_json()))
+    (folder / "episodes.jsonl").write_text("".join(json.dumps(r) + "\n" for r in RESULTS))
+    return folder
+
+
+def test_report_data_counts_what_the_policy_did_and_where_it_failed_first():
+    data = report_data("mine", OPTIONS, RESULTS)
+    assert data["cells"]["scene2"]["L0"]["IS"] == 100.0
+    assert data["cells"]["scene2"]["L0"]["ES"] == 50.0
+    assert data["did"]["scene2"]["L1"] == {"as instructed": 0.0,
+                                           "another training behaviour": 50.0,
+                                           "the other branch": 0.0, "unrecognised": 50.0}
+    assert data["confusions"] == [(("pickup_right_cube", "pickup_left_cube"), 1)]
+    [source] = data["first_failures"]
+    assert source["stage"] == "source" and source["episodes"] == 3
+    assert data["errors"] == [("the policy raised RuntimeError: boom", 1)]
+    assert data["matrices"]["scene2"]["counts"]["pickup_right_cube|pickup_left_cube"] == 1
+
+
+def test_the_report_files_show_table_gap_confusions_and_reasons(run):
+    markdown, html = write_report(run)
+    text = markdown.read_text()
+    assert "| scene2 | 100.0 | 50.0 | 50.0 | 0.0 | 0.0 | 0.0 |" in text
+    assert "| scene2 | 50.0 | 0.0 |" in text  # Intent minus Execution, L0 and L1
+    assert "| pickup_right_cube | pickup_left_cube | 1 |" in text
+    assert "the cube slipped (1)" in text
+    page = html.read_text()
+    assert page.startswith("<!doctype html>") and "<h3>scene2</h3>" in page
+    assert "background: rgb(105, 255, 105)" in page  # IS 100 shaded
+
+
+def test_two_runs_compare_side_by_side(run, tmp_path, capsys):
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "run.json").write_text(json.dumps(OPTIONS.to_json()))
+    (other / "episodes.jsonl").write_text(json.dumps(
+        _record("pickup_left_cube", "L0", 0.0, 0.0, False, None)) + "\n")
+    text = comparison([run, other])
+    assert "| scene2 | L0 | 100.0 | 0.0 | -100.0 |" in text
+    assert "| scene2 | L1 | 0.0 | - | - |" in text
+    assert main(["report", str(run), str(other), "--out", str(tmp_path / "c.md")]) == 0
+    assert (tmp_path / "c.md").read_text() == text
+    assert main(["report", str(run), str(other), str(run)]) == 1
+    assert "one run, or two to compare" in capsys.readouterr().err
+
+
+def test_a_folder_without_a_run_is_a_clear_error(tmp_path):
+    with pytest.raises(ReportError, match="holds no evaluation run"):
+        write_report(tmp_path)
