@@ -11,11 +11,10 @@ and the work folder removed.
 from __future__ import annotations
 
 import json
-import multiprocessing
 import shutil
-import signal
 import time
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 
 from tqdm import tqdm
@@ -24,8 +23,9 @@ from robofollow.build import Compiled
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
 from robofollow.data.files import write_json_atomic
 from robofollow.data.jobs import DemoJob, demo_jobs
-from robofollow.data.units import DemoFailedError, Options, UnitRecorder, unit_path
+from robofollow.data.units import Options, UnitRecorder, unit_path
 from robofollow.errors import RoboFollowError
+from robofollow.workers import results
 
 WRITERS = {"lerobot-v2.1": lerobot_v21.write, "lerobot-v3.0": lerobot_v30.write,
            "hdf5": hdf5_export.write}
@@ -79,49 +79,17 @@ def _manifest(out: Path) -> dict:
 
 # -- recording -----------------------------------------------------------------------------
 
-_WORKER: dict = {}
-
-
-def _start_worker(compiled: Compiled, options: Options, work: Path) -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's: it stops the pool
-    _WORKER["recorder"] = UnitRecorder(compiled, options, work)
-
-
-def _record_with(recorder: UnitRecorder, job: DemoJob) -> dict:
-    try:
-        return {"job": job.key, "demo": recorder.record(job)}
-    except DemoFailedError as error:
-        return {"job": job.key, "failed": str(error)}
-
-
-def _record(job: DemoJob) -> dict:
-    """In a pool worker."""
-    return _record_with(_WORKER["recorder"], job)
-
-
 def _record_all(compiled: Compiled, options: Options, work: Path,
                 jobs: list[DemoJob], workers: int, progress: bool) -> list[dict]:
     todo = [job for job in jobs if not (unit_path(work, job) / "demo.json").is_file()]
     bar = tqdm(total=len(jobs), initial=len(jobs) - len(todo), desc="recording", unit="demo",
                disable=not progress, smoothing=0.1)
     failed = []
+    # the compiled benchmark travels pickled to pool workers (~50 ms), not recompiled
     with bar:
-        if workers <= 1 or len(todo) <= 1:
-            recorder = UnitRecorder(compiled, options, work)
-            try:
-                for job in todo:
-                    result = _record_with(recorder, job)
-                    failed += [result] if "failed" in result else []
-                    bar.update()
-            finally:
-                recorder.close()
-        else:
-            context = multiprocessing.get_context("spawn")
-            # the compiled benchmark travels pickled (~50 ms), not recompiled in each worker
-            with context.Pool(workers, _start_worker, (compiled, options, work)) as pool:
-                for result in pool.imap_unordered(_record, todo, chunksize=1):
-                    failed += [result] if "failed" in result else []
-                    bar.update()
+        for result in results(partial(UnitRecorder, compiled, options, work), todo, workers):
+            failed += [result] if "failed" in result else []
+            bar.update()
     return failed
 
 

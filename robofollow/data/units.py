@@ -73,6 +73,13 @@ class UnitRecorder:
         self.compiled, self.options, self.work = compiled, options, work
         self.runner = ExpertRunner(options.width, options.height)
 
+    def __call__(self, job: DemoJob) -> dict:
+        """{"job", "demo"}, or {"job", "failed"} when no attempt was complete."""
+        try:
+            return {"job": job.key, "demo": self.record(job)}
+        except DemoFailedError as error:
+            return {"job": job.key, "failed": str(error)}
+
     def record(self, job: DemoJob) -> dict:
         """Record the job (unless its unit already exists); returns its demo.json record."""
         final = unit_path(self.work, job)

@@ -12,10 +12,9 @@ from __future__ import annotations
 
 import hashlib
 import json
-import multiprocessing
 import os
-import signal
 from dataclasses import asdict, dataclass
+from functools import partial
 from pathlib import Path
 
 from tqdm import tqdm
@@ -30,6 +29,7 @@ from robofollow.sim.cameras import side_by_side
 from robofollow.sim.simulation import CONTROL_HZ
 from robofollow.sim.stage import Stage
 from robofollow.sim.video import write_video
+from robofollow.workers import results
 
 RUN_FILE, RESULTS, SUMMARY = "run.json", "episodes.jsonl", "summary.json"
 VIDEO_MODES = ("none", "failures", "all")
@@ -88,7 +88,7 @@ class Evaluator:
         self.policy = load_policy(options.policy)
         self.stage = Stage()
 
-    def evaluate(self, episode: dict) -> dict:
+    def __call__(self, episode: dict) -> dict:
         instruction = given_instruction(self.compiled, episode, self.options.instruction_mode)
         frames: list = []
         on_frame = ((lambda stage: frames.append(side_by_side(stage.cameras.images())))
@@ -145,18 +145,6 @@ def _prepare(out: Path, options: EvalOptions, resume: bool) -> None:
     os.replace(partial, run_file)
 
 
-_WORKER: dict = {}
-
-
-def _start_worker(compiled: Compiled, options: EvalOptions, out: Path) -> None:
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's: it stops the pool
-    _WORKER["evaluator"] = Evaluator(compiled, options, out)
-
-
-def _evaluate(episode: dict) -> dict:
-    return _WORKER["evaluator"].evaluate(episode)
-
-
 def evaluate(compiled: Compiled, out: Path, options: EvalOptions, workers: int = 1,
              resume: bool = False, progress: bool = True) -> dict:
     """Run (or finish) the evaluation; returns the summary (also written to summary.json)."""
@@ -165,32 +153,19 @@ def evaluate(compiled: Compiled, out: Path, options: EvalOptions, workers: int =
     _prepare(out, options, resume)
     episodes = select_episodes(compiled, options)
     results_path = out / RESULTS
-    results = read_results(results_path)
-    done = {r["episode"] for r in results}
+    finished = read_results(results_path)
+    done = {r["episode"] for r in finished}
     todo = [e for e in episodes if e["episode"] not in done]
     bar = tqdm(total=len(episodes), initial=len(episodes) - len(todo), desc="evaluating",
                unit="episode", disable=not progress, smoothing=0.1)
     with bar, open(results_path, "a", encoding="utf-8") as sink:
-        def keep(record: dict) -> None:
-            sink.write(json.dumps(record, ensure_ascii=False) + "\n")
+        for record in results(partial(Evaluator, compiled, options, out), todo, workers):
+            sink.write(json.dumps(record, ensure_ascii=False) + "\n")  # one whole line
             sink.flush()
-            results.append(record)
+            finished.append(record)
             bar.update()
-
-        if workers <= 1 or len(todo) <= 1:
-            evaluator = Evaluator(compiled, options, out)
-            try:
-                for episode in todo:
-                    keep(evaluator.evaluate(episode))
-            finally:
-                evaluator.close()
-        else:
-            context = multiprocessing.get_context("spawn")
-            with context.Pool(workers, _start_worker, (compiled, options, out)) as pool:
-                for record in pool.imap_unordered(_evaluate, todo, chunksize=1):
-                    keep(record)
-    result = summary(results, options)
-    partial = out / (SUMMARY + ".partial")
-    partial.write_text(json.dumps(result, indent=1, sort_keys=True) + "\n", encoding="utf-8")
-    os.replace(partial, out / SUMMARY)
+    result = summary(finished, options)
+    staged = out / (SUMMARY + ".partial")
+    staged.write_text(json.dumps(result, indent=1, sort_keys=True) + "\n", encoding="utf-8")
+    os.replace(staged, out / SUMMARY)
     return result
