@@ -239,8 +239,10 @@ def cmd_eval(args) -> int:
     compiled = compile_specs(Path(args.specs))
     scenes = _names(args.scenes, list(compiled.spec.scenes), "scene")
     levels = _names(args.levels, list(LEVELS), "level")
+    known_tasks = [t.id for t in compiled.splits.tasks]
+    tasks = _names(args.tasks, known_tasks, "task") if args.tasks else []
     options = EvalOptions(args.policy, tuple(scenes), tuple(levels), args.rounds,
-                          args.instruction_mode, args.video, compiled.spec.digest)
+                          args.instruction_mode, args.video, compiled.spec.digest, tuple(tasks))
     try:
         result = evaluate(compiled, Path(args.out), options, args.workers, args.resume,
                           progress=not args.quiet)
@@ -405,6 +407,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
     p.add_argument("--scenes", metavar="LIST", help="comma-separated scenes (default: all)")
     p.add_argument("--levels", metavar="LIST", help="comma-separated levels (default: all)")
+    p.add_argument("--tasks", metavar="LIST", help="comma-separated task ids, e.g. "
+                   "scene2/L0/pickup_left_cube (default: every task of the scenes and levels)")
     p.add_argument("--rounds", type=_positive, default=10, metavar="N",
                    help="rounds per task, each with its own seed (default: 10)")
     p.add_argument("--workers", type=_positive, default=os.cpu_count() or 1, metavar="N",

@@ -143,3 +143,17 @@ def test_eval_rejects_unknown_scenes_and_levels(capsys, tmp_path):
     assert main(["eval", "--policy", "noop", "--out", str(tmp_path / "r"), "--specs",
                  str(builtin_specs()), "--levels", "L9"]) == 1
     assert "unknown level L9; known: L0, L1, L2, L3" in capsys.readouterr().err
+
+
+@pytest.mark.slow
+def test_eval_can_be_limited_to_named_tasks(tmp_path, capsys):
+    out = tmp_path / "two"
+    args = ["eval", "--policy", "noop", "--out", str(out), "--specs", str(builtin_specs()),
+            "--rounds", "1", "--workers", "1", "--quiet", "--tasks",
+            "scene2/L0/pickup_left_cube,scene4/L1/s41_l_pick_red_not_in_bowl@scene4_4"]
+    assert main(args) == 0
+    assert sorted(r["task"] for r in read_results(out / "episodes.jsonl")) == [
+        "scene2/L0/pickup_left_cube", "scene4/L1/s41_l_pick_red_not_in_bowl@scene4_4"]
+    assert main(["eval", "--policy", "noop", "--out", str(tmp_path / "x"), "--specs",
+                 str(builtin_specs()), "--tasks", "scene2/L0/pickup_left_cub"]) == 1
+    assert "unknown task scene2/L0/pickup_left_cub" in capsys.readouterr().err

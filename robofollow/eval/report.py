@@ -35,7 +35,7 @@ def load_run(run: Path) -> tuple[EvalOptions, list[dict]]:
         raise ReportError(f"{run} holds no evaluation run (no {RUN_FILE})")
     data = json.loads((run / RUN_FILE).read_text(encoding="utf-8"))
     options = EvalOptions(**dict(data, scenes=tuple(data["scenes"]),
-                                 levels=tuple(data["levels"])))
+                                 levels=tuple(data["levels"]), tasks=tuple(data["tasks"])))
     return options, read_results(run / RESULTS)
 
 

@@ -48,14 +48,17 @@ class EvalOptions:
     instruction_mode: str
     video: str
     spec_digest: str
+    tasks: tuple[str, ...] = ()  # task ids (scene/level/label) to keep; empty: every task
 
     def to_json(self) -> dict:
-        return dict(asdict(self), scenes=list(self.scenes), levels=list(self.levels))
+        return dict(asdict(self), scenes=list(self.scenes), levels=list(self.levels),
+                    tasks=list(self.tasks))
 
 
 def select_episodes(compiled: Compiled, options: EvalOptions) -> list[dict]:
     return [e for e in all_episodes(compiled) if e["scene"] in options.scenes
-            and e["level"] in options.levels and e["round"] <= options.rounds]
+            and e["level"] in options.levels and e["round"] <= options.rounds
+            and (not options.tasks or e["task"] in options.tasks)]
 
 
 def _digest(data: bytes) -> str:
