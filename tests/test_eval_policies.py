@@ -124,3 +124,10 @@ def test_a_failing_policy_ends_its_episode_with_the_reason_and_is_scored(stage, 
                       policy)
     assert run.steps == steps and run.error.startswith(message)
     assert run.score.intent_score == 0.0
+
+
+@pytest.mark.slow
+def test_the_expert_holds_in_full_chunks_once_its_plan_is_done(stage):
+    run = run_episode(benchmark(), stage, episode("scene2/L0/pickup_left_cube#r1"),
+                      REFERENCE_POLICIES["expert"]())
+    assert run.queries == ACTION_BUDGET // CHUNK_LIMIT

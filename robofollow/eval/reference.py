@@ -32,6 +32,7 @@ RANDOM_MOVE_STEPS = 25  # control steps per random motion
 class _Scripted:
     """Plays a precomputed action sequence in chunks, then holds the last target."""
     uses = frozenset({"privileged"})
+    chunk = CHUNK  # actions per call
 
     def __init__(self):
         self.actions: np.ndarray | None = None
@@ -43,9 +44,9 @@ class _Scripted:
     def act(self, observation: dict) -> np.ndarray:
         if self.actions is None:
             self.actions = self.script(observation)
-        chunk = self.actions[self.cursor:self.cursor + CHUNK]
+        chunk = self.actions[self.cursor:self.cursor + self.chunk]
         self.cursor += len(chunk)
-        return chunk if len(chunk) else self.actions[-1:]
+        return chunk if len(chunk) else np.repeat(self.actions[-1:], self.chunk, axis=0)
 
     def script(self, observation: dict) -> np.ndarray:
         raise NotImplementedError
