@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import base64
 import json
+import re
 import socket
 import struct
 import threading
@@ -134,5 +135,8 @@ def test_reset_is_retried_after_a_lost_connection():
 def test_no_server_and_bad_addresses_are_clear_errors():
     with pytest.raises(PolicyConnectionError, match="did not answer 'reset' after 2 tries"):
         TcpPolicy("127.0.0.1", 9, timeout=1, retries=1).reset()
-    with pytest.raises(PolicyLoadError, match="expected tcp://HOST:PORT"):
-        load_policy("tcp://localhost")
+    for spec in ("tcp://localhost", "tcp://localhost:80?speed=2", "tcp://h:80?timeout=x"):
+        with pytest.raises(PolicyLoadError, match=re.escape(spec)):
+            load_policy(spec)
+    policy = load_policy("tcp://localhost:80?timeout=2.5&retries=7")
+    assert (policy.timeout, policy.retries) == (2.5, 7)

@@ -165,3 +165,44 @@ def test_robofollow_serve_runs_a_policy_server(tmp_path):
         process.wait(10)
     np.testing.assert_allclose(actions, np.repeat(robot.home_state()[None], 50, axis=0),
                                rtol=0, atol=1e-6)
+
+
+@pytest.mark.slow
+def test_a_server_killed_mid_run_costs_its_episodes_not_the_run(tmp_path):
+    from robofollow.eval.runner import EvalOptions, evaluate, read_results
+
+    holder = {}
+
+    def dies_after_two_chunks(connection):
+        connection.send(packb({}))
+        for count, data in enumerate(connection, start=1):
+            obs = unpackb(data)
+            connection.send(packb({"actions": np.repeat(obs["state"][None], 50, axis=0)}))
+            if count == 2:
+                threading.Thread(target=holder["server"].shutdown).start()
+                connection.close()
+                return
+
+    uri, holder["server"] = _start(dies_after_two_chunks)
+    options = EvalOptions(uri, ("scene2",), ("L0",), 1, "normal", "none",
+                          benchmark().spec.digest,
+                          ("scene2/L0/pickup_left_cube", "scene2/L0/pickup_right_cube"))
+    import robofollow.eval.websocket as websocket
+
+    original = websocket.WebsocketPolicy.__init__
+
+    def quick(self, uri, timeout=1.0, retries=1):
+        original(self, uri, timeout, retries)
+
+    websocket.WebsocketPolicy.__init__ = quick
+    try:
+        summary = evaluate(benchmark(), tmp_path / "run", options, progress=False)
+    finally:
+        websocket.WebsocketPolicy.__init__ = original
+    records = {r["task"]: r for r in read_results(tmp_path / "run" / "episodes.jsonl")}
+    assert summary["episodes"] == 2
+    first, second = (records[f"scene2/L0/{name}"] for name in ("pickup_left_cube",
+                                                               "pickup_right_cube"))
+    assert first["steps"] == 100 and "PolicyConnectionError" in first["error"]
+    assert second["steps"] == 0 and second["error"].startswith("reset:") or (
+        second["steps"] == 0 and "PolicyConnectionError" in second["error"])

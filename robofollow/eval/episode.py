@@ -67,10 +67,13 @@ def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy,
     privileged = (Privileged(sim, world, scene, compiled.candidates(scene.id), episode["seed"])
                   if "privileged" in policy.uses else None)
     text = episode["instruction"] if instruction is None else instruction
-    policy.reset()
     steps = queries = 0
     error = None
-    while steps < budget:
+    try:
+        policy.reset()
+    except Exception as failure:  # e.g. its server is gone: the episode is scored as it stands
+        error = f"reset: the policy raised {type(failure).__name__}: {failure}"
+    while error is None and steps < budget:
         queries += 1
         try:
             chunk = validate_actions(policy.act(observation(policy, stage, text, steps,
