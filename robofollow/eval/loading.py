@@ -5,6 +5,7 @@ speaking openpi's websocket protocol) or `tcp://host:port` (upstream RoboFollow'
 from __future__ import annotations
 
 import importlib
+from urllib.parse import parse_qsl, urlsplit
 
 from robofollow.errors import RoboFollowError
 from robofollow.eval.policy import OBSERVATION_PARTS, Policy
@@ -18,19 +19,8 @@ class PolicyLoadError(RoboFollowError):
 def load_policy(spec: str) -> Policy:
     if spec in REFERENCE_POLICIES:
         return REFERENCE_POLICIES[spec]()
-    if spec.startswith(("ws://", "wss://")):
-        from robofollow.eval.websocket import (
-            WebsocketPolicy,  # (it serves loaded policies)
-        )
-
-        return WebsocketPolicy(spec)
-    if spec.startswith("tcp://"):
-        from robofollow.eval.tcp import TcpPolicy
-
-        host, _, port = spec.removeprefix("tcp://").rpartition(":")
-        if not host or not port.isdigit():
-            raise PolicyLoadError(f"--policy {spec!r}: expected tcp://HOST:PORT")
-        return TcpPolicy(host, int(port))
+    if spec.startswith(("ws://", "wss://", "tcp://")):
+        return _remote(spec)
     module_name, _, factory_name = spec.partition(":")
     if not module_name or not factory_name:
         raise PolicyLoadError(f"--policy {spec!r}: expected one of "
@@ -52,3 +42,27 @@ def load_policy(spec: str) -> Policy:
             f"--policy {spec!r}: the factory's object is not a policy (it needs reset(), "
             f"act(observation) and uses, a set of {sorted(OBSERVATION_PARTS)})")
     return policy
+
+
+def _remote(spec: str) -> Policy:
+    """A policy server: `ws://` or `tcp://` HOST:PORT, optionally `?timeout=S&retries=N`
+    (seconds per call before a retry, default 60; retries after a time-out or a lost
+    connection, default 3)."""
+    address = urlsplit(spec)
+    try:
+        settings = {key: float(value) if key == "timeout" else int(value)
+                    for key, value in parse_qsl(address.query,
+                                                strict_parsing=bool(address.query))}
+        port = address.port
+    except ValueError as error:
+        raise PolicyLoadError(f"--policy {spec!r}: {error}") from None
+    if set(settings) - {"timeout", "retries"} or not address.hostname or port is None:
+        raise PolicyLoadError(f"--policy {spec!r}: expected {address.scheme}://HOST:PORT "
+                              "with optional ?timeout=SECONDS&retries=N")
+    if address.scheme == "tcp":
+        from robofollow.eval.tcp import TcpPolicy
+
+        return TcpPolicy(address.hostname, port, **settings)
+    from robofollow.eval.websocket import WebsocketPolicy  # (it serves loaded policies)
+
+    return WebsocketPolicy(f"{address.scheme}://{address.netloc}{address.path}", **settings)
