@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import os
 from dataclasses import asdict, dataclass
 from functools import partial
 from pathlib import Path
@@ -20,6 +19,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from robofollow.build import Compiled, all_episodes
+from robofollow.data.files import write_json_atomic
 from robofollow.errors import RoboFollowError
 from robofollow.eval.episode import EpisodeRun, run_episode
 from robofollow.eval.instructions import given_instruction
@@ -143,9 +143,7 @@ def _prepare(out: Path, options: EvalOptions, resume: bool) -> None:
     if out.is_dir() and any(out.iterdir()):
         raise EvalRunError(f"{out} is not empty and holds no run")
     out.mkdir(parents=True, exist_ok=True)
-    partial = run_file.with_name(RUN_FILE + ".partial")
-    partial.write_text(json.dumps(options.to_json(), indent=1), encoding="utf-8")
-    os.replace(partial, run_file)
+    write_json_atomic(run_file, options.to_json())
 
 
 def evaluate(compiled: Compiled, out: Path, options: EvalOptions, workers: int = 1,
@@ -168,7 +166,5 @@ def evaluate(compiled: Compiled, out: Path, options: EvalOptions, workers: int =
             finished.append(record)
             bar.update()
     result = summary(finished, options)
-    staged = out / (SUMMARY + ".partial")
-    staged.write_text(json.dumps(result, indent=1, sort_keys=True) + "\n", encoding="utf-8")
-    os.replace(staged, out / SUMMARY)
+    write_json_atomic(out / SUMMARY, result)
     return result
