@@ -3,8 +3,8 @@ turn until the oracle scores an attempt complete; the unit is written in a priva
 folder and renamed into place, so a unit on disk is always whole.
 
 A unit folder holds `demo.json` (seed, discarded attempts, length, instructions, image
-statistics), `arrays.npz` (`state`, `action`: float32 (N, 14)) and the camera frames: one mp4
-per camera (LeRobot formats) or `episode.hdf5` with everything (HDF5 format).
+statistics) and, for the LeRobot formats, `arrays.npz` (`state`, `action`: float32 (N, 14))
+and one mp4 per camera; for HDF5, `episode.hdf5` with everything.
 """
 
 from __future__ import annotations
@@ -128,8 +128,9 @@ class UnitRecorder:
                     "instructions": list(job.instructions), "image_stats": sink.image_stats(),
                     "spec_digest": options.spec_digest}
             if options.format == "hdf5":
-                write_hdf5_arrays(h5, arrays, demo)
-            np.savez(folder / "arrays.npz", **arrays)
+                write_hdf5_arrays(h5, arrays, demo)  # the HDF5 file holds the arrays too
+            else:
+                np.savez(folder / "arrays.npz", **arrays)
             return demo
 
     def close(self) -> None:
