@@ -53,9 +53,7 @@ class RoboFollowEnv(gym.Env):
         })
         self.action_space = spaces.Box(robot.ACTION_LOW.astype(np.float32),
                                        robot.ACTION_HIGH.astype(np.float32), dtype=np.float32)
-        self.stage = Stage(width, height)
-        self.sim: Simulation | None = None
-        self.cameras: Cameras | None = None
+        self.stage = Stage(width, height)  # the current layout's simulation and cameras
         self.recorder: Recorder | None = None
         self.episode: dict = self.default_episode
         self.steps = 0
@@ -69,8 +67,7 @@ class RoboFollowEnv(gym.Env):
         episode = (options or {}).get("episode")
         self.episode = self._episode(episode) if episode else self.default_episode
         scene = self.compiled.spec.scenes[self.episode["scene"]]
-        self.sim = self.stage.simulation(scene, self.episode["layout"], render=True)
-        self.cameras = self.stage.cameras
+        self.stage.simulation(scene, self.episode["layout"], render=True)
         jitter_seed = self.episode["seed"] if seed is None else seed
         self.sim.reset(jitter_seed)
         self.steps, self.command = 0, robot.home_state()
@@ -109,6 +106,13 @@ class RoboFollowEnv(gym.Env):
     def render(self):
         return self.cameras.render("cam_high") if self.cameras else None
 
+    @property
+    def sim(self) -> Simulation | None:
+        return self.stage.sim
+
+    @property
+    def cameras(self) -> Cameras | None:
+        return self.stage.cameras
+
     def close(self) -> None:
         self.stage.close()
-        self.sim, self.cameras = None, None
