@@ -26,7 +26,7 @@ from robofollow.data.stats import aggregate, array_stats
 from robofollow.data.units import Options
 from robofollow.resources import builtin_specs
 from robofollow.sim.rollout import ExpertRunner
-from robofollow.sim.video import VideoEncoder, concatenate, frame_times, read_frames
+from robofollow.sim.video import VideoEncoder, concatenate, probe, read_frames
 from tests.sim_helpers import benchmark
 
 TASK = "pickup_yellow_block_1_left"
@@ -252,7 +252,7 @@ def test_joined_videos_keep_every_frame_in_order(tmp_path):
     concatenate(parts, tmp_path / "all.mp4")
     joined = read_frames(tmp_path / "all.mp4")
     assert len(joined) == 16 and all(np.array_equal(a, b) for a, b in zip(joined, expected, strict=True))
-    assert frame_times(tmp_path / "all.mp4") == pytest.approx([i / 25 for i in range(16)])
+    assert probe(tmp_path / "all.mp4").times == pytest.approx([i / 25 for i in range(16)])
 
 
 def test_tasks_are_chosen_by_label_or_scene_and_a_typo_gets_suggestions(tmp_path, capsys):

@@ -24,7 +24,7 @@ from robofollow.data.lerobot import VIDEO_KEYS
 from robofollow.data.stats import array_stats
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
-from robofollow.sim.video import frame_times
+from robofollow.sim.video import probe
 
 WIDTH = len(robot.JOINT_NAMES)
 VECTOR_FEATURES = ("observation.state", "action")
@@ -207,20 +207,17 @@ def _check_video(path: Path, feature: dict, fps: float, report: Report,
         report.error(where, f"missing video {path.name}")
         return None
     try:
-        with av.open(str(path)) as container:
-            stream = container.streams.video[0]
-            size = (stream.codec_context.height, stream.codec_context.width)
-            rate = float(stream.average_rate or 0)
-        times = frame_times(path)
+        video = probe(path)
     except (av.FFmpegError, IndexError) as error:
         report.error(where, f"unreadable video: {error}")
         return None
-    if abs(rate - fps) > 1e-3:
-        report.error(where, f"video runs at {rate:g} frames/s, the dataset at {fps:g}")
+    if abs(video.fps - fps) > 1e-3:
+        report.error(where, f"video runs at {video.fps:g} frames/s, the dataset at {fps:g}")
     height, width = feature["shape"][:2]
-    if size != (height + height % 2, width + width % 2):
-        report.error(where, f"video is {size[1]}x{size[0]}, the feature says {width}x{height}")
-    return times
+    if (video.height, video.width) != (height + height % 2, width + width % 2):
+        report.error(where, f"video is {video.width}x{video.height}, the feature says "
+                     f"{width}x{height}")
+    return video.times
 
 
 def _check_totals(info: dict, lengths: list[int], report: Report, tasks: int | None = None,

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import av
@@ -85,10 +86,20 @@ def concatenate(sources: list[Path], target: Path) -> None:
                 offset += end
 
 
-def frame_times(path: str | Path) -> list[float]:
-    """Presentation times (s) of a video's frames, in order, from its packets (nothing is
-    decoded)."""
+@dataclass(frozen=True)
+class VideoProbe:
+    width: int
+    height: int
+    fps: float  # the stream's average frame rate
+    times: list[float]  # presentation times (s) of the frames, in order
+
+
+def probe(path: str | Path) -> VideoProbe:
+    """A video's size, frame rate and frame times, read from its stream and packets in one
+    pass (nothing is decoded)."""
     with av.open(str(path)) as container:
         video = container.streams.video[0]
-        return sorted(float(packet.pts * video.time_base) for packet in container.demux(video)
-                      if packet.dts is not None)
+        times = sorted(float(packet.pts * video.time_base) for packet in container.demux(video)
+                       if packet.dts is not None)
+        return VideoProbe(video.codec_context.width, video.codec_context.height,
+                          float(video.average_rate or 0), times)
