@@ -44,21 +44,25 @@ class Recorder:
         for arm, site in enumerate(sim.tcp_sites):
             mujoco.mju_mat2Quat(quats[arm], data.site_xmat[site])
         frames["ee_quaternions"].append(quats)
+        pairs = data.contact.geom[:data.ncon]  # (contacts, 2) geom ids
+        groups = self.geom_group[pairs]
+        first, second = groups[:, 0], groups[:, 1]
+        between = (first >= 0) & (second >= 0) & (first != second)
         contacts = np.zeros((self.size, self.size), dtype=bool)
-        touching: dict[int, set[int]] = {}
-        for contact in data.contact[:data.ncon]:
-            a, b = self.geom_group[contact.geom1], self.geom_group[contact.geom2]
-            if a >= 0 and b >= 0 and a != b:
-                contacts[a, b] = contacts[b, a] = True
-            for geom, other in ((contact.geom1, b), (contact.geom2, a)):
-                touching.setdefault(int(geom), set()).add(int(other))
-        held = []
-        bodies = set(range(len(sim.bodies)))  # contact groups below this index are bodies
-        for finger_a, finger_b in self.fingers:
-            common = touching.get(finger_a, set()) & touching.get(finger_b, set()) & bodies
-            held.append(min(common) if common else -1)
+        contacts[first[between], second[between]] = True
+        contacts[second[between], first[between]] = True
+        held = [self._held(pairs, groups, fingers) for fingers in self.fingers]
         frames["grasped"].append(held)
         frames["contacts"].append(contacts)
+
+    def _held(self, pairs: np.ndarray, groups: np.ndarray, fingers: tuple[int, int]) -> int:
+        """The body (contact group below len(bodies)) both fingers of a gripper touch, or -1."""
+        common = None
+        for finger in fingers:
+            touched = set(groups[pairs[:, 0] == finger, 1]) | set(groups[pairs[:, 1] == finger, 0])
+            common = touched if common is None else common & touched
+        bodies = [int(g) for g in common if 0 <= g < len(self.sim.bodies)]
+        return min(bodies) if bodies else -1
 
     def trajectory(self) -> Trajectory:
         frames = {k: np.array(v) for k, v in self.frames.items()}

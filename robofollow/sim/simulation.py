@@ -126,11 +126,9 @@ class Simulation:
     def state(self) -> np.ndarray:
         """The measured 14-D joint state (gripper normalised from the finger opening)."""
         qpos = self.data.qpos
-        parts = []
-        for index in range(2):
-            fingers = qpos[self.finger_qpos[index]].mean() / robot.FINGER_TRAVEL
-            parts += [qpos[self.arm_qpos[index]], [np.clip(fingers, 0.0, 1.0)]]
-        return np.concatenate(parts)
+        fingers = np.clip(qpos[self.finger_qpos].mean(axis=1) / robot.FINGER_TRAVEL, 0.0, 1.0)
+        return np.concatenate([qpos[self.arm_qpos[0]], fingers[:1],
+                               qpos[self.arm_qpos[1]], fingers[1:]])
 
     def positions(self) -> np.ndarray:
         return self.data.xpos[self.body_ids].copy()
