@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import difflib
 import io
 import json
 import os
@@ -281,7 +282,10 @@ def _names(text: str | None, known: list[str], what: str) -> list[str]:
     chosen = [n.strip() for n in (text or "").split(",") if n.strip()] or known
     unknown = [n for n in chosen if n not in known]
     if unknown:
-        raise RoboFollowError(f"unknown {what} {', '.join(unknown)}; known: {', '.join(known)}")
+        hints = [m for n in unknown for m in difflib.get_close_matches(n, known, n=3)]
+        listed = (f"did you mean {', '.join(dict.fromkeys(hints))}?" if hints and len(known) > 12
+                  else f"known: {', '.join(known[:12])}{' …' if len(known) > 12 else ''}")
+        raise RoboFollowError(f"unknown {what} {', '.join(unknown)}; {listed}")
     return [n for n in known if n in chosen]
 
 

@@ -21,6 +21,7 @@ from tqdm import tqdm
 from robofollow.build import Compiled, all_episodes
 from robofollow.data.files import write_json_atomic
 from robofollow.errors import RoboFollowError
+from robofollow.eval.chance import references
 from robofollow.eval.episode import EpisodeRun, run_episode
 from robofollow.eval.instructions import given_instruction
 from robofollow.eval.loading import load_policy
@@ -98,7 +99,8 @@ class Evaluator:
                     if self.options.video != "none" else None)
         run = run_episode(self.compiled, self.stage, episode, self.policy, instruction,
                           on_frame=on_frame)
-        record = result_record(episode, instruction, run)
+        record = dict(result_record(episode, instruction, run),
+                      **references(self.compiled, episode, instruction))
         if frames and (self.options.video == "all" or not run.score.complete):
             name = episode["episode"].replace("/", "__").replace("#", "_") + ".mp4"
             (self.out / "videos").mkdir(exist_ok=True)

@@ -23,4 +23,12 @@ def table_text(summary: dict) -> str:
     avg = summary["avg"]
     lines.append(f"{'Avg':<10}" + "  ".join(f"{m} {avg[m]:.1f}" for m in METRICS)
                  + f"   ({summary['episodes']} episodes)")
+    references = summary.get("references", {})
+    if "chance_IS" in references:
+        lines.append(f"{'Chance':<10}IS {references['chance_IS']:.1f}  CR "
+                     f"{references['chance_CR']:.1f}   (a language-blind guess among the "
+                     "training behaviours each layout allows)")
+    if "followed_IS" in references and references["followed_IS"] < 100:
+        lines.append(f"{'Followed':<10}IS {references['followed_IS']:.1f}   (perfectly following "
+                     "the instructions given)")
     return "\n".join(lines)

@@ -3,6 +3,10 @@
 Per scene x level: IS and ES are means over episodes; CR is the mean over tasks of each task's
 completion rate (a task macro average; the episode micro average is kept too). Avg is the
 mean over the scene x level cells. Everything is reported on a 0-100 scale.
+
+Episodes that carry references (an evaluation's `chance` and `followed_intent`) add their means
+to each cell: chance_IS / chance_CR (a language-blind guess) and followed_IS (perfectly
+following the instruction given), and their averages under "references".
 """
 
 from __future__ import annotations
@@ -13,11 +17,13 @@ from collections.abc import Iterable, Mapping
 import numpy as np
 
 METRICS = ("IS", "ES", "CR")
+REFERENCES = ("chance_IS", "chance_CR", "followed_IS")  # when the episodes carry them
 
 
 def table(results: Iterable[Mapping]) -> dict:
     """`results`: one mapping per episode with scene, level, task, intent_score,
-    execution_score and complete. Returns {"cells": {scene: {level: {...}}}, "avg": {...}}."""
+    execution_score and complete. Returns {"cells": {scene: {level: {...}}}, "avg": {...}} and,
+    when every cell has them, "references": {...}."""
     grouped: dict[tuple[str, str], list[Mapping]] = defaultdict(list)
     for result in results:
         grouped[result["scene"], result["level"]].append(result)
@@ -31,10 +37,27 @@ def table(results: Iterable[Mapping]) -> dict:
             "ES": _percent(e["execution_score"] for e in episodes),
             "CR": _percent(np.mean(done) for done in tasks.values()),
             "CR_micro": _percent(e["complete"] for e in episodes),
-            "episodes": len(episodes), "tasks": len(tasks)}
+            "episodes": len(episodes), "tasks": len(tasks), **_references(episodes)}
     flat = [cell for levels in cells.values() for cell in levels.values()]
-    avg = {m: round(float(np.mean([c[m] for c in flat])), 2) if flat else 0.0 for m in METRICS}
-    return {"cells": cells, "avg": avg}
+    averages = {"avg": {m: _mean(flat, m) for m in METRICS}}
+    shown = [m for m in REFERENCES if flat and all(m in c for c in flat)]
+    if shown:
+        averages["references"] = {m: _mean(flat, m) for m in shown}
+    return {"cells": cells, **averages}
+
+
+def _mean(cells: list[dict], key: str) -> float:
+    return round(float(np.mean([c[key] for c in cells])), 2) if cells else 0.0
+
+
+def _references(episodes: list[Mapping]) -> dict:
+    found = {}
+    if all("chance" in e for e in episodes):
+        found["chance_IS"] = _percent(e["chance"]["IS"] for e in episodes)
+        found["chance_CR"] = _percent(e["chance"]["CR"] for e in episodes)
+    if all(e.get("followed_intent") is not None for e in episodes):
+        found["followed_IS"] = _percent(e["followed_intent"] for e in episodes)
+    return found
 
 
 def _percent(values: Iterable) -> float:

@@ -29,7 +29,8 @@ FULL = 0.99  # a score at least this share of its maximum counts as full credit
 
 
 @lru_cache(maxsize=4096)
-def _nodes(behaviour: Behaviour, profile: ScoringProfile) -> tuple[tuple[str, dict, str], ...]:
+def scoring_nodes(behaviour: Behaviour,
+                  profile: ScoringProfile) -> tuple[tuple[str, dict, str], ...]:
     """The goal DAG's nodes in scoring order, each with a key naming what it checks (equal
     keys in different behaviours evaluate alike, so a recording evaluates them once)."""
     graph = goal_graph(behaviour, profile)
@@ -73,7 +74,7 @@ def complete(stages: list[StageResult]) -> bool:
 
 def evaluate(rec: Recording, behaviour: Behaviour) -> list[StageResult]:
     """Each stage of the behaviour's goal DAG, gated."""
-    nodes = _nodes(behaviour, rec.profile)
+    nodes = scoring_nodes(behaviour, rec.profile)
     marks: dict[str, dict] = {}
     reversed_steps = _reverse_order(rec, behaviour)
     results, blocked_intent, blocked_execution = [], None, None

@@ -1,0 +1,34 @@
+"""Per-episode references an evaluation record carries, computed symbolically on the
+episode's layout (nominal poses):
+
+chance            a language-blind guess: Intent and completion expected from performing,
+                  uniformly at random, one of the scene's training behaviours the layout allows
+                  (what the blind policy does); its completion is 1/K for K behaviours.
+followed_intent   the Intent earned by perfectly following the instruction the policy was
+                  given (1 for the episode's own; with --instruction-mode shuffled, the credit
+                  of the stages the other task shares; None when it does not ground).
+"""
+
+from __future__ import annotations
+
+from robofollow.build import Compiled
+from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.grounding import ground
+from robofollow.compiler.parser import parse
+from robofollow.compiler.world import World
+from robofollow.errors import RoboFollowError
+from robofollow.eval.reference import available_behaviours
+from robofollow.oracle.chance import guessing, intent_if_performed
+
+
+def references(compiled: Compiled, episode: dict, instruction: str) -> dict:
+    scene = compiled.spec.scenes[episode["scene"]]
+    world = World(scene, episode["layout"])
+    asked = Behaviour.model_validate(episode["behaviour"])
+    training = compiled.candidates(scene.id)
+    chance = guessing(asked, [training[label] for label in available_behaviours(world, training)])
+    try:
+        followed = intent_if_performed(asked, ground(parse(instruction), world))
+    except RoboFollowError:
+        followed = None
+    return {"chance": chance, "followed_intent": followed}
