@@ -74,6 +74,17 @@ def test_the_report_files_show_table_gap_confusions_and_reasons(run):
     assert "background: rgb(105, 255, 105)" in page  # IS 100 shaded
 
 
+def test_records_with_references_read_intent_against_chance(run):
+    lines = [dict(r, chance={"IS": 0.25, "CR": 0.125}, followed_intent=0.5) for r in RESULTS]
+    (run / "episodes.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines))
+    markdown, html = write_report(run)
+    assert "| scene2 | L0 | 100.0 | 25.0 | 12.5 | 50.0 |" in markdown.read_text()
+    assert "<td>scene2</td><td>L1</td><td>0.0</td><td>25.0</td><td>12.5</td><td>50.0</td>" in (
+        html.read_text())
+    (run / "episodes.jsonl").write_text("".join(json.dumps(r) + "\n" for r in RESULTS))
+    assert "chance" not in write_report(run)[0].read_text()  # records without references
+
+
 def test_two_runs_compare_side_by_side(run, tmp_path, capsys):
     other = tmp_path / "other"
     other.mkdir()

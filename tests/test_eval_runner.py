@@ -17,6 +17,7 @@ from robofollow.cli import main
 from robofollow.eval.instructions import given_instruction
 from robofollow.eval.loading import PolicyLoadError, load_policy
 from robofollow.eval.runner import EvalOptions, EvalRunError, evaluate, read_results
+from robofollow.eval.tables import table_text
 from robofollow.resources import builtin_specs
 from tests.sim_helpers import benchmark, episode
 
@@ -42,9 +43,16 @@ def test_the_expert_run_records_every_episode_and_scores_in_full(expert_run):
     results = read_results(expert_run / "episodes.jsonl")
     assert len(results) == len({r["episode"] for r in results}) == 16
     summary = json.loads((expert_run / "summary.json").read_text())
-    assert summary["cells"][SCENE][LEVEL] | {"CR_micro": 0} == {
-        "IS": 100.0, "ES": 100.0, "CR": 100.0, "CR_micro": 0, "episodes": 16, "tasks": 16}
+    cell = summary["cells"][SCENE][LEVEL]
+    assert {k: cell[k] for k in ("IS", "ES", "CR", "episodes", "tasks", "followed_IS")} == {
+        "IS": 100.0, "ES": 100.0, "CR": 100.0, "episodes": 16, "tasks": 16, "followed_IS": 100.0}
+    assert 100 / 16 <= cell["chance_CR"] <= cell["chance_IS"] < 50  # one of 16 behaviours
     assert summary["avg"] == {"IS": 100.0, "ES": 100.0, "CR": 100.0}
+    assert summary["references"] == {k: cell[k] for k in ("chance_IS", "chance_CR",
+                                                          "followed_IS")}
+    printed = table_text(summary)
+    assert f"Chance    IS {cell['chance_IS']:.1f}  CR {cell['chance_CR']:.1f}" in printed
+    assert "Followed" not in printed  # shown only when it is below 100
     record = results[0]
     assert record["steps"] == 500 and record["error"] is None
     assert record["instruction"] == episode(record["episode"])["instruction"]
@@ -58,7 +66,7 @@ def test_a_killed_run_resumes_with_every_episode_once_and_the_same_summary(exper
                                                                           tmp_path):
     out = tmp_path / "broken"
     args = ["eval", "--policy", "expert", "--out", str(out), "--specs", str(builtin_specs()),
-            "--scenes", SCENE, "--levels", LEVEL, "--rounds", "1", "--workers", "1", "--quiet"]
+            "--scenes", SCENE, "--levels", LEVEL, "--rounds", "1", "--workers", "2", "--quiet"]
     process = subprocess.Popen([sys.executable, "-m", "robofollow.cli", *args],
                                start_new_session=True, stdout=subprocess.DEVNULL,
                                stderr=subprocess.DEVNULL)

@@ -1,0 +1,88 @@
+"""Chance levels decided from the goal DAGs: the Intent a perfectly executed behaviour earns
+when another was asked for, a language-blind guess's expectations, and (end to end) the Intent
+the scorer gives the expert performing another task's instruction."""
+
+from __future__ import annotations
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from robofollow.eval.chance import references
+from robofollow.eval.episode import run_episode
+from robofollow.eval.instructions import given_instruction
+from robofollow.eval.reference import REFERENCE_POLICIES
+from robofollow.oracle.chance import guessing, intent_if_performed
+from robofollow.sim.stage import Stage
+from tests.sim_helpers import benchmark, episode
+
+TRAINING = benchmark().training
+LABELS = sorted(TRAINING)
+
+
+def _intent(asked: str, performed: str) -> float:
+    return intent_if_performed(TRAINING[asked], TRAINING[performed])
+
+
+def test_performing_the_asked_behaviour_earns_full_intent():
+    assert all(_intent(label, label) == 1.0 for label in LABELS)
+
+
+def test_another_object_earns_nothing_and_another_target_the_source_stage_only():
+    assert _intent("pickup_left_cube", "pickup_right_cube") == 0.0
+    stack = "stack_left_cube_on_red_cylinder"
+    assert _intent(stack, "stack_left_cube_on_blue_cylinder") == pytest.approx(0.4)
+    assert _intent(stack, "push_left_cube_to_red_cylinder") == 0.0  # a push grasps nothing
+
+
+def test_doing_more_than_asked_still_finishes_but_doing_less_stops_at_the_missing_stage():
+    pick, unstack = "s41_r_pick_green_cylinder_top", "s42_r_unstack_green_cylinder_to_slot6"
+    assert _intent(pick, unstack) == 1.0  # an unstack picks the cylinder up first
+    assert _intent(unstack, pick) == pytest.approx(0.4)  # the placement never happens
+    sequence = "s41_seq_r_green_cylinder_then_l_bowl"
+    assert _intent(sequence, pick) == pytest.approx(0.4)  # the second step never starts
+
+
+def test_a_blind_guess_completes_with_probability_one_in_k_for_distinct_behaviours():
+    choices = [TRAINING[label] for label in ("pickup_left_cube", "pickup_right_cube",
+                                              "pickup_red_cylinder", "pickup_blue_cylinder")]
+    assert guessing(choices[0], choices) == {"IS": 0.25, "CR": 0.25}
+    assert guessing(choices[0], []) == {"IS": 0.0, "CR": 0.0}
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.sampled_from(LABELS), st.lists(st.sampled_from(LABELS), min_size=1, max_size=8))
+def test_guessing_is_bounded_and_completion_never_exceeds_intent(asked, performed):
+    chance = guessing(TRAINING[asked], [TRAINING[label] for label in performed])
+    assert 0.0 <= chance["CR"] <= chance["IS"] <= 1.0
+    if asked in performed:
+        assert chance["CR"] >= round(performed.count(asked) / len(performed), 6)
+
+
+def test_episode_references_name_the_chance_and_the_followed_instruction():
+    record = episode("scene2/L0/pickup_left_cube#r1")
+    own = references(benchmark(), record, record["instruction"])
+    assert own["followed_intent"] == 1.0
+    assert 0.0 < own["chance"]["CR"] <= own["chance"]["IS"] < 0.5
+    assert references(benchmark(), record, "")["followed_intent"] is None
+    other = episode("scene2/L0/pickup_right_cube#r1")["instruction"]
+    assert references(benchmark(), record, other)["followed_intent"] == 0.0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("episode_id", [
+    "scene1/L0/place_yellow_block_1_behind_red_cylinder#r1",
+    "scene2/L0/stack_left_cube_on_red_cylinder#r1",
+    "scene3/L0/r_pick2_via4_to6_long_front#r1",
+    "scene4/L0/s41_r_pick_green_cylinder_top#r1",
+])
+def test_the_scorer_gives_the_expert_doing_another_task_the_intent_the_dags_predict(episode_id):
+    record = episode(episode_id)
+    instruction = given_instruction(benchmark(), record, "shuffled")
+    stage = Stage()
+    try:
+        run = run_episode(benchmark(), stage, record, REFERENCE_POLICIES["expert"](), instruction)
+    finally:
+        stage.close()
+    expected = references(benchmark(), record, instruction)["followed_intent"]
+    assert run.score.intent_score == pytest.approx(expected), (instruction, run.score.stages)
