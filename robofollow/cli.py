@@ -18,6 +18,7 @@ from robofollow.compiler.realize import STYLES, realize
 from robofollow.compiler.spec import LEVELS
 from robofollow.data.jobs import FORMATS, INSTRUCTION_MODES
 from robofollow.errors import InstructionError, RoboFollowError
+from robofollow.workers import EXECUTORS
 
 _PARSE_EXAMPLES = """\
 examples:
@@ -246,7 +247,7 @@ def cmd_eval(args) -> int:
                           args.instruction_mode, args.video, compiled.spec.digest, tuple(tasks))
     try:
         result = evaluate(compiled, Path(args.out), options, args.workers, args.resume,
-                          progress=not args.quiet)
+                          progress=not args.quiet, executor=args.executor)
     except KeyboardInterrupt:
         print(f"\ninterrupted: the finished episodes are kept in {args.out}; run the same "
               "command with --resume to continue", file=sys.stderr)
@@ -406,7 +407,8 @@ def build_parser() -> argparse.ArgumentParser:
                "eval --policy mypkg.policies:make --out runs/mine",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--policy", required=True,
-                   help="expert, blind, noop, random, module:factory or ws://HOST:PORT")
+                   help="expert, blind, noop, random, module:factory, ws://HOST:PORT (openpi) or "
+                        "tcp://HOST:PORT (upstream); servers take ?timeout=S&retries=N")
     p.add_argument("--out", required=True, metavar="RUN", help="run folder")
     p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
     p.add_argument("--scenes", metavar="LIST", help="comma-separated scenes (default: all)")
@@ -416,7 +418,11 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rounds", type=_positive, default=10, metavar="N",
                    help="rounds per task, each with its own seed (default: 10)")
     p.add_argument("--workers", type=_positive, default=os.cpu_count() or 1, metavar="N",
-                   help="worker processes (default: the number of CPUs)")
+                   help="workers, one simulation each (default: the number of CPUs)")
+    p.add_argument("--executor", choices=EXECUTORS, default="process",
+                   help="process: a local process pool; ray: Ray actors on the cluster at "
+                        "RAY_ADDRESS, or a local one (needs robofollow[ray]); the results are "
+                        "the same (default: process)")
     p.add_argument("--instruction-mode", choices=("normal", "empty", "shuffled"),
                    default="normal", help="the episode's instruction, none, or another "
                                           "task's (default: normal)")

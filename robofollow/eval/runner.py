@@ -149,7 +149,7 @@ def _prepare(out: Path, options: EvalOptions, resume: bool) -> None:
 
 
 def evaluate(compiled: Compiled, out: Path, options: EvalOptions, workers: int = 1,
-             resume: bool = False, progress: bool = True) -> dict:
+             resume: bool = False, progress: bool = True, executor: str = "process") -> dict:
     """Run (or finish) the evaluation; returns the summary (also written to summary.json)."""
     if options.spec_digest != compiled.spec.digest:
         raise EvalRunError("the options' spec digest is not the compiled specs' digest")
@@ -162,7 +162,8 @@ def evaluate(compiled: Compiled, out: Path, options: EvalOptions, workers: int =
     bar = tqdm(total=len(episodes), initial=len(episodes) - len(todo), desc="evaluating",
                unit="episode", disable=not progress, smoothing=0.1)
     with bar, open(results_path, "a", encoding="utf-8") as sink:
-        for record in results(partial(Evaluator, compiled, options, out), todo, workers):
+        make = partial(Evaluator, compiled, options, out)
+        for record in results(make, todo, workers, executor):
             sink.write(json.dumps(record, ensure_ascii=False) + "\n")  # one whole line
             sink.flush()
             finished.append(record)
