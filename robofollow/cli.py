@@ -244,7 +244,8 @@ def cmd_eval(args) -> int:
     known_tasks = [t.id for t in compiled.splits.tasks]
     tasks = _names(args.tasks, known_tasks, "task") if args.tasks else []
     options = EvalOptions(args.policy, tuple(scenes), tuple(levels), args.rounds,
-                          args.instruction_mode, args.video, compiled.spec.digest, tuple(tasks))
+                          args.instruction_mode, args.video, compiled.spec.digest, tuple(tasks),
+                          args.sample)
     try:
         result = evaluate(compiled, Path(args.out), options, args.workers, args.resume,
                           progress=not args.quiet, executor=args.executor)
@@ -403,6 +404,7 @@ def build_parser() -> argparse.ArgumentParser:
                     "prints IS / ES / CR per scene and level. Interrupted runs continue with "
                     "--resume.",
         epilog="examples:\n  robofollow eval --policy expert --out runs/expert\n  robofollow "
+               "eval --policy expert --out runs/quick --sample 2 --rounds 1\n  robofollow "
                "eval --policy blind --out runs/blind --levels L0,L1 --rounds 2\n  robofollow "
                "eval --policy mypkg.policies:make --out runs/mine",
         formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -415,6 +417,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--levels", metavar="LIST", help="comma-separated levels (default: all)")
     p.add_argument("--tasks", metavar="LIST", help="comma-separated task ids, e.g. "
                    "scene2/L0/pickup_left_cube (default: every task of the scenes and levels)")
+    p.add_argument("--sample", type=_positive, metavar="N",
+                   help="only N tasks of each scene and level, evenly spread over its task "
+                        "list (a quick look; default: every task)")
     p.add_argument("--rounds", type=_positive, default=10, metavar="N",
                    help="rounds per task, each with its own seed (default: 10)")
     p.add_argument("--workers", type=_positive, default=os.cpu_count() or 1, metavar="N",

@@ -16,7 +16,13 @@ import pytest
 from robofollow.cli import main
 from robofollow.eval.instructions import given_instruction
 from robofollow.eval.loading import PolicyLoadError, load_policy
-from robofollow.eval.runner import EvalOptions, EvalRunError, evaluate, read_results
+from robofollow.eval.runner import (
+    EvalOptions,
+    EvalRunError,
+    evaluate,
+    read_results,
+    select_episodes,
+)
 from robofollow.eval.tables import table_text
 from robofollow.resources import builtin_specs
 from tests.sim_helpers import benchmark, episode
@@ -164,4 +170,20 @@ def test_eval_can_be_limited_to_named_tasks(tmp_path, capsys):
         "scene2/L0/pickup_left_cube", "scene4/L1/s41_l_pick_red_not_in_bowl@scene4_4"]
     assert main(["eval", "--policy", "noop", "--out", str(tmp_path / "x"), "--specs",
                  str(builtin_specs()), "--tasks", "scene2/L0/pickup_left_cub"]) == 1
-    assert "unknown task scene2/L0/pickup_left_cub" in capsys.readouterr().err
+    error = capsys.readouterr().err
+    assert "unknown task scene2/L0/pickup_left_cub;" in error
+    assert "did you mean scene2/L0/pickup_left_cube" in error
+
+
+def test_a_sample_keeps_n_tasks_of_every_scene_and_level_spread_over_its_list():
+    every = select_episodes(benchmark(), _options(scenes=("scene1", "scene4"),
+                                                  levels=("L0", "L1")))
+    sampled = select_episodes(benchmark(), _options(scenes=("scene1", "scene4"),
+                                                    levels=("L0", "L1"), sample=3))
+    for scene in ("scene1", "scene4"):
+        for level in ("L0", "L1"):
+            tasks = list(dict.fromkeys(e["task"] for e in every
+                                       if (e["scene"], e["level"]) == (scene, level)))
+            kept = [e["task"] for e in sampled if (e["scene"], e["level"]) == (scene, level)]
+            assert kept == [tasks[0], tasks[len(tasks) // 3], tasks[2 * len(tasks) // 3]]
+    assert len(select_episodes(benchmark(), _options(sample=100))) == 16  # fewer tasks: all

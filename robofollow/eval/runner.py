@@ -50,6 +50,7 @@ class EvalOptions:
     video: str
     spec_digest: str
     tasks: tuple[str, ...] = ()  # task ids (scene/level/label) to keep; empty: every task
+    sample: int | None = None  # keep this many tasks per scene and level, evenly spread
 
     def to_json(self) -> dict:
         return dict(asdict(self), scenes=list(self.scenes), levels=list(self.levels),
@@ -57,9 +58,26 @@ class EvalOptions:
 
 
 def select_episodes(compiled: Compiled, options: EvalOptions) -> list[dict]:
-    return [e for e in all_episodes(compiled) if e["scene"] in options.scenes
-            and e["level"] in options.levels and e["round"] <= options.rounds
-            and (not options.tasks or e["task"] in options.tasks)]
+    chosen = [e for e in all_episodes(compiled) if e["scene"] in options.scenes
+              and e["level"] in options.levels and e["round"] <= options.rounds
+              and (not options.tasks or e["task"] in options.tasks)]
+    if options.sample:
+        kept = set()
+        for tasks in _tasks_by_cell(chosen).values():
+            step = len(tasks) / min(options.sample, len(tasks))
+            kept.update(tasks[int(i * step)] for i in range(min(options.sample, len(tasks))))
+        chosen = [e for e in chosen if e["task"] in kept]
+    return chosen
+
+
+def _tasks_by_cell(episodes: list[dict]) -> dict[tuple[str, str], list[str]]:
+    """Each scene x level's task ids, in the compiled order."""
+    cells: dict[tuple[str, str], list[str]] = {}
+    for e in episodes:
+        tasks = cells.setdefault((e["scene"], e["level"]), [])
+        if e["task"] not in tasks:
+            tasks.append(e["task"])
+    return cells
 
 
 def _digest(data: bytes) -> str:
