@@ -207,9 +207,7 @@ def cmd_generate(args) -> int:
         result = generate(compiled, Path(args.out), options, args.workers, args.resume,
                           progress=not args.quiet)
     except KeyboardInterrupt:
-        print(f"\ninterrupted: the finished demonstrations are kept in {args.out}; run the same "
-              "command with --resume to continue", file=sys.stderr)
-        return 130
+        return _interrupted("demonstrations", args.out)
     except OSError as error:
         raise RoboFollowError(f"cannot write the dataset in {args.out}: {error}") from None
     if result.already_complete:
@@ -250,9 +248,7 @@ def cmd_eval(args) -> int:
         result = evaluate(compiled, Path(args.out), options, args.workers, args.resume,
                           progress=not args.quiet, executor=args.executor)
     except KeyboardInterrupt:
-        print(f"\ninterrupted: the finished episodes are kept in {args.out}; run the same "
-              "command with --resume to continue", file=sys.stderr)
-        return 130
+        return _interrupted("episodes", args.out)
     markdown, _ = write_report(Path(args.out))
     print(f"{args.policy} ({args.instruction_mode} instructions), {args.out}:")
     print(table_text(result))
@@ -277,6 +273,12 @@ def cmd_report(args) -> int:
     else:
         print(text)
     return 0
+
+
+def _interrupted(what: str, out: str) -> int:
+    print(f"\ninterrupted: the finished {what} are kept in {out}; run the same command with "
+          "--resume to continue", file=sys.stderr)
+    return 130
 
 
 def _names(text: str | None, known: list[str], what: str) -> list[str]:

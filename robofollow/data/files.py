@@ -33,3 +33,12 @@ def link_or_copy(source: Path, target: Path) -> None:
         os.link(source, target)
     except OSError:
         shutil.copyfile(source, target)
+
+
+def changed_options(previous: dict, current: dict) -> str | None:
+    """Why a run cannot be resumed with `current` options, or None when they are the same."""
+    changed = [key for key, value in current.items() if previous.get(key) != value]
+    if not changed:
+        return None
+    return (f"was run with other options ({', '.join(changed)} differ); resume with the same "
+            "options or choose another folder")

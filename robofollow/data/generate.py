@@ -21,7 +21,7 @@ from tqdm import tqdm
 
 from robofollow.build import Compiled
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
-from robofollow.data.files import write_json_atomic
+from robofollow.data.files import changed_options, write_json_atomic
 from robofollow.data.jobs import DemoJob, demo_jobs
 from robofollow.data.units import Options, UnitRecorder, unit_path
 from robofollow.errors import RoboFollowError
@@ -67,10 +67,9 @@ def _check_folder(out: Path, options: Options, resume: bool) -> None:
         if occupied:
             raise GenerateError(f"{out} holds files but no RoboFollow generation to resume")
         return
-    if previous != options.to_json():
-        changed = [k for k in options.to_json() if previous.get(k) != options.to_json()[k]]
-        raise GenerateError(f"{out} was generated with other options ({', '.join(changed)} "
-                            "differ); resume with the same options or choose another folder")
+    problem = changed_options(previous, options.to_json())
+    if problem:
+        raise GenerateError(f"{out} {problem}")
 
 
 def _manifest(out: Path) -> dict:

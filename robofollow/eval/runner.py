@@ -19,7 +19,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from robofollow.build import Compiled, all_episodes
-from robofollow.data.files import write_json_atomic
+from robofollow.data.files import changed_options, write_json_atomic
 from robofollow.errors import RoboFollowError
 from robofollow.eval.chance import references
 from robofollow.eval.episode import EpisodeRun, run_episode
@@ -155,10 +155,9 @@ def _prepare(out: Path, options: EvalOptions, resume: bool) -> None:
         if not resume:
             raise EvalRunError(f"{out} already holds a run; pass --resume to continue it, or "
                                "choose another folder")
-        if previous != options.to_json():
-            changed = [k for k, v in options.to_json().items() if previous.get(k) != v]
-            raise EvalRunError(f"{out} was run with other options ({', '.join(changed)} "
-                               "differ); resume with the same options")
+        problem = changed_options(previous, options.to_json())
+        if problem:
+            raise EvalRunError(f"{out} {problem}")
         return
     if out.is_dir() and any(out.iterdir()):
         raise EvalRunError(f"{out} is not empty and holds no run")
