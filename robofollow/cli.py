@@ -295,10 +295,14 @@ def _names(text: str | None, known: list[str], what: str) -> list[str]:
 
 def cmd_serve(args) -> int:
     from robofollow.build import compile_specs
+    from robofollow.eval.tcp import TcpPolicyServer
     from robofollow.eval.websocket import PolicyServer
 
-    server = PolicyServer(compile_specs(Path(args.specs)), args.policy)
-    print(f"serving {args.policy} on ws://{args.host}:{args.port} (Ctrl-C stops)", flush=True)
+    server_class, scheme = ((TcpPolicyServer, "tcp") if args.protocol == "tcp"
+                            else (PolicyServer, "ws"))
+    server = server_class(compile_specs(Path(args.specs)), args.policy)
+    print(f"serving {args.policy} on {scheme}://{args.host}:{args.port} (Ctrl-C stops)",
+          flush=True)
     try:
         server.serve_forever(args.host, args.port)
     except KeyboardInterrupt:
@@ -449,11 +453,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(handler=cmd_report)
 
     p = commands.add_parser(
-        "serve", help="serve a Python policy over openpi's websocket protocol",
-        description="Expose a policy (a reference policy or module:factory) as a websocket "
-                    "server speaking openpi's protocol (msgpack-numpy, metadata on connect, "
+        "serve", help="serve a Python policy over openpi's websocket or upstream's TCP protocol",
+        description="Expose a policy (a reference policy or module:factory) as a server: "
+                    "websocket speaking openpi's protocol (msgpack-numpy, metadata on connect, "
                     "replies {'actions': [H, 14]}), for `robofollow eval --policy ws://HOST:PORT`"
-                    " or any openpi client.")
+                    " or any openpi client; or tcp speaking upstream RoboFollow's protocol "
+                    "(length-prefixed JSON; reset / set_instruction / predict), for "
+                    "`robofollow eval --policy tcp://HOST:PORT` or upstream's evaluator.")
+    p.add_argument("--protocol", choices=("websocket", "tcp"), default="websocket",
+                   help="wire protocol (default: websocket)")
     p.add_argument("--policy", required=True, help="expert, blind, noop, random, or "
                                                     "module:factory")
     p.add_argument("--host", default="0.0.0.0", help="address to listen on (default: 0.0.0.0)")

@@ -8,6 +8,8 @@ import json
 import re
 import socket
 import struct
+import subprocess
+import sys
 import threading
 
 import numpy as np
@@ -16,7 +18,9 @@ import pytest
 from robofollow.eval.episode import run_episode
 from robofollow.eval.loading import PolicyLoadError, load_policy
 from robofollow.eval.policy import PolicyConnectionError
-from robofollow.eval.tcp import TcpPolicy
+from robofollow.eval.reference import ExpertPolicy
+from robofollow.eval.tcp import TcpPolicy, TcpPolicyServer
+from robofollow.resources import builtin_specs
 from robofollow.sim import robot
 from robofollow.sim.stage import Stage
 from tests.sim_helpers import benchmark, episode
@@ -140,3 +144,71 @@ def test_no_server_and_bad_addresses_are_clear_errors():
             load_policy(spec)
     policy = load_policy("tcp://localhost:80?timeout=2.5&retries=7")
     assert (policy.timeout, policy.retries) == (2.5, 7)
+
+
+def _serve_tcp(policy_spec: str) -> tuple[TcpPolicyServer, int]:
+    """`robofollow serve --protocol tcp`'s server for `policy_spec`, in a thread."""
+    server = TcpPolicyServer(benchmark(), policy_spec)
+    ready, holder = threading.Event(), {}
+
+    def on_ready(listener):
+        holder["port"] = listener.getsockname()[1]
+        ready.set()
+
+    threading.Thread(target=server.serve_forever, args=("127.0.0.1", 0, on_ready),
+                     daemon=True).start()
+    assert ready.wait(30)
+    return server, holder["port"]
+
+
+@pytest.mark.slow
+def test_the_tcp_served_expert_scores_as_the_in_process_expert(stage):
+    server, port = _serve_tcp("expert")
+    policy = load_policy(f"tcp://127.0.0.1:{port}")
+    for episode_id in (EPISODE, "scene4/L0/s41_seq_l_bowl_then_r_green_cylinder#r2"):
+        record = episode(episode_id)
+        local = run_episode(benchmark(), stage, record, ExpertPolicy())
+        remote = run_episode(benchmark(), stage, record, policy)
+        assert policy.uses == {"instruction", "privileged"}  # declared in reset's answer
+        assert remote.error is None and remote.score == local.score
+        np.testing.assert_array_equal(remote.trajectory.action, local.trajectory.action)
+    policy.close()
+
+
+def test_the_tcp_server_answers_bad_requests_with_an_error_and_keeps_serving():
+    server, port = _serve_tcp("noop")
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as connection:
+        _write(connection, {"cmd": "dance", "obs": None})
+        reply = _read(connection)
+        assert reply["error"] == ("ValueError: unknown command 'dance' (expected reset, "
+                                  "set_instruction or predict)") and "Traceback" in reply[
+                                      "traceback"]
+        _write(connection, {"cmd": "reset", "obs": None})
+        assert _read(connection)["res"]["robofollow"]["uses"] == []
+        _write(connection, {"cmd": "predict", "obs": {
+            "observation": {}, "instruction": "stay",
+            "joint_action": {"vector": _array(robot.home_state())}}})
+        actions = _unarray(_read(connection)["res"])
+    np.testing.assert_allclose(actions, np.repeat(robot.home_state()[None], 50, axis=0),
+                               rtol=0, atol=1e-6)
+
+
+def test_robofollow_serve_speaks_tcp_when_asked():
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    process = subprocess.Popen(
+        [sys.executable, "-m", "robofollow.cli", "serve", "--protocol", "tcp", "--policy",
+         "noop", "--host", "127.0.0.1", "--port", str(port), "--specs", str(builtin_specs())],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert "serving noop on tcp://127.0.0.1:" in process.stdout.readline()
+        policy = TcpPolicy("127.0.0.1", port, timeout=10)
+        policy.reset()
+        assert policy.uses == frozenset()
+        actions = policy.act({"state": robot.home_state(), "instruction": "stay"})
+        policy.close()
+    finally:
+        process.terminate()
+        process.wait(10)
+    assert actions.shape == (50, 14)

@@ -52,6 +52,11 @@ def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy,
     """Evaluate `policy` on a compiled episode. `instruction` replaces the episode's (the
     empty and shuffled controls); `on_frame(stage)` is called after every recorded frame."""
     began = time.perf_counter()
+    error = None
+    try:  # first: a served policy may declare what it uses in its answer
+        policy.reset()
+    except Exception as failure:  # e.g. its server is gone: the episode is scored as it stands
+        error = f"reset: the policy raised {type(failure).__name__}: {failure}"
     scene = compiled.spec.scenes[episode["scene"]]
     render = "images" in policy.uses or on_frame is not None
     sim = stage.simulation(scene, episode["layout"], render=render)
@@ -68,11 +73,6 @@ def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy,
                   if "privileged" in policy.uses else None)
     text = episode["instruction"] if instruction is None else instruction
     steps = queries = 0
-    error = None
-    try:
-        policy.reset()
-    except Exception as failure:  # e.g. its server is gone: the episode is scored as it stands
-        error = f"reset: the policy raised {type(failure).__name__}: {failure}"
     while error is None and steps < budget:
         queries += 1
         try:

@@ -7,6 +7,11 @@ travel as {"__numpy_array__": true, "data": base64 bytes, "dtype", "shape"}. A p
 observation is {"observation": {"head_camera": {"rgb"}, "left_camera": {"rgb"},
 "right_camera": {"rgb"}} (uint8 H x W x 3), "joint_action": {"vector"} (14), "instruction"};
 its reply is the [T, 14] absolute joint targets.
+
+`robofollow serve --protocol tcp` puts a Python policy behind this protocol. Extensions only
+between RoboFollow ends: the server answers reset with {"robofollow": {version, uses}} (upstream
+servers answer None), and then the client sends only the parts the policy uses, with
+"privileged" = {scene, layout, seed} in a reference policy's predict observations.
 """
 
 from __future__ import annotations
@@ -15,13 +20,17 @@ import base64
 import json
 import socket
 import struct
+import traceback
 
 import numpy as np
 
+from robofollow.build import Compiled
 from robofollow.errors import RoboFollowError
-from robofollow.eval.policy import PolicyConnectionError
+from robofollow.eval.policy import OBSERVATION_PARTS, PolicyConnectionError
+from robofollow.eval.serving import ServedPolicy, privileged_message
 
 MAX_MESSAGE = 128 * 2 ** 20  # bytes
+UPSTREAM_USES = frozenset({"state", "instruction", "images"})
 CAMERAS = {"cam_high": "head_camera", "cam_left_wrist": "left_camera",
            "cam_right_wrist": "right_camera"}
 
@@ -79,10 +88,10 @@ class TcpPolicy:
     """A policy served by upstream's TCP protocol. `reset` is retried after a lost
     connection (as upstream's client does); a lost `predict` is retried once the connection
     is back, up to `retries` times."""
-    uses = frozenset({"state", "instruction", "images"})
 
     def __init__(self, host: str, port: int, timeout: float = 60.0, retries: int = 3):
         self.address, self.timeout, self.retries = (host, port), timeout, retries
+        self.uses = UPSTREAM_USES
         self.connection: socket.socket | None = None
         self.instruction: str | None = None
 
@@ -106,7 +115,10 @@ class TcpPolicy:
         return reply.get("res")
 
     def reset(self) -> None:
-        self._call("reset")
+        reply = self._call("reset")
+        declared = reply.get("robofollow", {}).get("uses") if isinstance(reply, dict) else None
+        self.uses = (frozenset(declared) & OBSERVATION_PARTS if declared is not None
+                     else UPSTREAM_USES)
         self.instruction = None
 
     def act(self, observation: dict) -> np.ndarray:
@@ -114,12 +126,63 @@ class TcpPolicy:
             self._call("set_instruction", observation["instruction"])
             self.instruction = observation["instruction"]
         obs = {"observation": {CAMERAS[name]: {"rgb": image}
-                               for name, image in observation["images"].items()},
+                               for name, image in observation.get("images", {}).items()},
                "joint_action": {"vector": np.asarray(observation["state"], dtype=np.float64)},
                "instruction": observation["instruction"]}
+        if "privileged" in observation:
+            obs["privileged"] = privileged_message(observation["privileged"])
         return np.asarray(self._call("predict", obs))
 
     def close(self) -> None:
         if self.connection is not None:
             self.connection.close()
             self.connection = None
+
+
+class TcpPolicyServer:
+    """Serves one Python policy over upstream's TCP protocol, one connection at a time."""
+
+    def __init__(self, compiled: Compiled, policy_spec: str):
+        self.served = ServedPolicy(compiled, policy_spec)
+        self.instruction = ""
+
+    def handle(self, connection: socket.socket) -> None:
+        with connection:
+            while True:
+                try:
+                    request = receive_message(connection)
+                except (OSError, ConnectionError, ValueError):  # closed, or not this protocol
+                    return
+                try:
+                    reply = {"res": self._answer(request)}
+                except Exception as error:  # the client gets the message and the traceback
+                    reply = {"error": f"{type(error).__name__}: {error}",
+                             "traceback": traceback.format_exc()}
+                send_message(connection, reply)
+
+    def _answer(self, request: dict):
+        command, obs = request.get("cmd"), request.get("obs")
+        if command == "reset":
+            self.served.reset()
+            self.instruction = ""
+            return self.served.metadata
+        if command == "set_instruction":
+            self.instruction = obs
+            return None
+        if command == "predict":
+            cameras = obs.get("observation", {})
+            images = {name: cameras[key]["rgb"] for name, key in CAMERAS.items()
+                      if key in cameras} or None
+            return self.served.act(obs["joint_action"]["vector"],
+                                   obs.get("instruction", self.instruction), images,
+                                   obs.get("privileged"))
+        raise ValueError(f"unknown command {command!r} (expected reset, set_instruction or "
+                         "predict)")
+
+    def serve_forever(self, host: str, port: int, ready=None) -> None:
+        with socket.create_server((host, port)) as listener:
+            if ready is not None:
+                ready(listener)
+            while True:
+                connection, _ = listener.accept()
+                self.handle(connection)

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import traceback
 from contextlib import ExitStack
-from importlib.metadata import version
 
 import numpy as np
 from websockets.exceptions import ConnectionClosed
@@ -27,11 +26,10 @@ from websockets.sync.server import serve
 
 from robofollow.build import Compiled
 from robofollow.errors import RoboFollowError
-from robofollow.eval.loading import load_policy
-from robofollow.eval.policy import OBSERVATION_PARTS, PolicyConnectionError, Privileged
+from robofollow.eval.policy import OBSERVATION_PARTS, PolicyConnectionError
+from robofollow.eval.serving import ServedPolicy, privileged_message
 from robofollow.eval.wire import packb, unpackb
 from robofollow.sim.cameras import CAMERA_NAMES
-from robofollow.sim.stage import Stage
 
 OPENPI_USES = frozenset({"state", "instruction", "images"})
 
@@ -91,9 +89,7 @@ class WebsocketPolicy:
             message["images"] = {camera: np.ascontiguousarray(image.transpose(2, 0, 1))
                                  for camera, image in observation["images"].items()}
         if "privileged" in observation:
-            privileged = observation["privileged"]
-            message["privileged"] = {"scene": privileged.scene.id,
-                                     "layout": privileged.sim.layout, "seed": privileged.seed}
+            message["privileged"] = privileged_message(observation["privileged"])
         reply = self._call(message)
         if "actions" not in reply:
             raise RoboFollowError(f"the policy server's reply has no 'actions' "
@@ -110,46 +106,24 @@ class PolicyServer:
     """Serves one Python policy; one client at a time is the expected use."""
 
     def __init__(self, compiled: Compiled, policy_spec: str):
-        self.compiled, self.policy = compiled, load_policy(policy_spec)
-        self.stage = Stage()
-        self.start: tuple | None = None
-        self.privileged: Privileged | None = None
-        self.metadata = {"robofollow": {"version": version("robofollow"),
-                                        "uses": sorted(self.policy.uses)},
-                         "policy": policy_spec}
-
-    def observation(self, message: dict) -> dict:
-        obs = {"state": np.asarray(message["state"], dtype=np.float32),
-               "instruction": message.get("prompt", ""), "step": message.get("step", 0)}
-        if "images" in message:
-            obs["images"] = {camera: np.ascontiguousarray(message["images"][camera]
-                                                           .transpose(1, 2, 0))
-                             for camera in CAMERA_NAMES if camera in message["images"]}
-        if "privileged" in self.policy.uses and "privileged" in message:
-            start = (message["privileged"]["scene"], message["privileged"]["layout"],
-                     message["privileged"]["seed"])
-            if start != self.start:  # rebuild the episode's start state (deterministic)
-                scene = self.compiled.spec.scenes[start[0]]
-                sim = self.stage.simulation(scene, start[1])
-                world = sim.reset(start[2])
-                self.privileged = Privileged(sim, world, scene,
-                                             self.compiled.candidates(scene.id), start[2])
-                self.start = start
-            obs["privileged"] = self.privileged
-        return obs
+        self.served = ServedPolicy(compiled, policy_spec)
 
     def handle(self, connection) -> None:
-        connection.send(packb(self.metadata))
+        connection.send(packb(self.served.metadata))
         try:
             for data in connection:
                 message = unpackb(data)
                 if message.get("reset"):
-                    self.policy.reset()
-                    self.start = None
+                    self.served.reset()
                     connection.send(packb({"reset": True}))
                     continue
-                actions = self.policy.act(self.observation(message))
-                connection.send(packb({"actions": np.asarray(actions, dtype=np.float32)}))
+                images = ({camera: np.ascontiguousarray(message["images"][camera]
+                                                        .transpose(1, 2, 0))
+                           for camera in CAMERA_NAMES if camera in message["images"]}
+                          if "images" in message else None)
+                actions = self.served.act(message["state"], message.get("prompt", ""), images,
+                                          message.get("privileged"), message.get("step", 0))
+                connection.send(packb({"actions": actions}))
         except ConnectionClosed:
             return
         except Exception:  # the client gets the traceback, as openpi servers do
