@@ -27,7 +27,7 @@ from robofollow.compiler.splits import Splits, TestTask, episode_seed, generate
 from robofollow.compiler.training import check_training
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
-from robofollow.oracle.audit import audit, findings
+from robofollow.oracle.audit import FINDING_KEYS, audit, findings
 
 
 @dataclass
@@ -122,8 +122,8 @@ def summary(compiled: Compiled) -> str:
     for scene, counts in report["counts"].items():
         lines.append(f"{scene:<10}" + "".join(f"{counts[level]:>6}" for level in LEVELS))
     lines += ["", f"rejected candidates: {report['rejected']} (rejected.jsonl says why)"]
-    for key, title in (("leakage", "leakage"), ("repertoire_violations", "repertoire violations"),
-                       ("ambiguities", "ambiguities")):
+    for key in FINDING_KEYS:
+        title = key.replace("_", " ")
         items = report[key]
         lines.append(f"{title}: {len(items) or 'none'}")
         lines += [f"  {item['task']}: {item['finding']}" for item in items[:20]]

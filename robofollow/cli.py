@@ -87,12 +87,41 @@ def cmd_compile(args) -> int:
 def cmd_audit(args) -> int:
     from robofollow.build import clean, compile_specs, summary
 
+    from robofollow.data.files import write_jsonl
+    from robofollow.oracle.task_audit import audit_task_list, read_task_list, task_list
+
     compiled = compile_specs(Path(args.specs))
+    if args.export_tasks:
+        write_jsonl(Path(args.export_tasks), task_list(compiled.splits))
+        print(f"wrote {len(compiled.splits.tasks)} test tasks to {args.export_tasks}",
+              file=sys.stderr)
+    report, listed = compiled.report, None
+    if args.tasks:
+        listed = audit_task_list(compiled.spec, compiled.training,
+                                 read_task_list(Path(args.tasks)))
+        report = {**report, **listed}
     if args.json:
-        print(json.dumps(compiled.report, indent=1, sort_keys=True))
+        print(json.dumps(report, indent=1, sort_keys=True))
     else:
         print(summary(compiled), end="")
-    return 0 if clean(compiled) else 1
+        if listed is not None:
+            print(_task_list_text(args.tasks, listed), end="")
+    return 0 if clean(compiled) and not (listed and listed["findings"]) else 1
+
+
+def _task_list_text(path: str, listed: dict) -> str:
+    """Findings grouped by kind, with counts."""
+    from robofollow.oracle.task_audit import FINDING_KINDS
+
+    findings = listed["findings"]
+    lines = ["", f"task list {path}: {listed['checked']} tasks checked, "
+                 f"{len(findings) or 'no'} finding{'' if len(findings) == 1 else 's'}"]
+    for kind in FINDING_KINDS:
+        items = [f for f in findings if f["kind"] == kind]
+        if items:
+            lines.append(f"{kind}: {len(items)}")
+            lines += [f"  {f['id']}: {f['message']}" for f in items]
+    return "\n".join(lines) + "\n"
 
 
 def _positive(text: str) -> int:
@@ -380,12 +409,24 @@ def build_parser() -> argparse.ArgumentParser:
     p.set_defaults(handler=cmd_compile)
 
     p = commands.add_parser(
-        "audit", help="audit the splits: entropy, leakage, repertoire, ambiguity",
-        description="Compile the specs in memory and report the audit. Exit status 1 on a "
-                    "bad spec or any finding.")
+        "audit", help="audit the splits, or any task list: entropy, leakage, repertoire, "
+                      "ambiguity",
+        description="Compile the specs in memory and report the audit. With --tasks, also "
+                    "audit a task list (JSON Lines: id, scene, level, layout, instruction, "
+                    "optional expect) against the specs' scenes and training tasks: parse "
+                    "errors, missing or ambiguous referents (also at the jitter extremes), "
+                    "expectation mismatches, behaviours outside the training repertoire, "
+                    "leakage and level inconsistencies. Exit status 1 on a bad spec or any "
+                    "finding.")
     p.add_argument("specs", nargs="?", default="specs",
                    help="a spec file or a folder of .rf files (default: specs)")
-    p.add_argument("--json", action="store_true", help="print the audit as one JSON object")
+    p.add_argument("--tasks", metavar="FILE.jsonl", help="a task list to audit")
+    p.add_argument("--export-tasks", metavar="FILE.jsonl",
+                   help="write the compiled test tasks as a task list (expect = the compiled "
+                        "behaviour)")
+    p.add_argument("--json", action="store_true",
+                   help="print the audit as one JSON object (with --tasks: plus findings and "
+                        "checked)")
     p.set_defaults(handler=cmd_audit)
 
     p = commands.add_parser(

@@ -19,11 +19,13 @@ TABLE = "table"  # the table as a landmark ('not touching the table')
 class GroundingError(RoboFollowError):
     """An instruction that does not pick out one behaviour in a layout."""
 
-    def __init__(self, code: str, message: str, candidates: tuple[str, ...] = ()):
+    def __init__(self, code: str, message: str, candidates: tuple[str, ...] = (),
+                 ref: lf.Ref | None = None):
         super().__init__(message)
         self.code = code
         self.message = message
         self.candidates = candidates
+        self.ref = ref  # the description that failed, when one did
 
 
 def kind_matches(world: World, body: str, noun: str) -> bool:
@@ -81,11 +83,11 @@ class Grounder:
         found = self.referents(ref)
         if not found:
             raise GroundingError("no-referent", f"nothing in layout {self.world.layout.name} "
-                                                f"is {_describe(ref)}")
+                                                f"is {_describe(ref)}", ref=ref)
         if len(found) > 1:
             raise GroundingError("ambiguous", f"{_describe(ref)} could be any of "
                                               f"{', '.join(found)} in layout "
-                                              f"{self.world.layout.name}", tuple(found))
+                                              f"{self.world.layout.name}", tuple(found), ref)
         return found[0]
 
     def satisfies(self, body: str, constraint: lf.Constraint) -> bool:
@@ -135,7 +137,7 @@ class Grounder:
     def _tie(self, tied: list[str], constraint, ref: lf.Ref | None) -> None:
         word = getattr(constraint, "extreme", None) or getattr(constraint, "size", "")
         raise GroundingError("ambiguous", f"no single {word} one: {', '.join(tied)} are within "
-                                          "tolerance of each other", tuple(tied))
+                                          "tolerance of each other", tuple(tied), ref)
 
     # ---------------------------------------------------------------- conditions
     def holds(self, condition: lf.Condition) -> bool:

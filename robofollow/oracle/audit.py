@@ -2,7 +2,9 @@
 
 - scene entropy H(T|S) over the training groups;
 - leakage: no test (layout, form) pair is a training pair, no L2/L3 form is a training form,
-  L1 instructions are training instructions, no instruction names a spec identifier;
+  no instruction names a spec identifier;
+- level consistency: L0 tasks are training pairs, L1 tasks training instructions on layouts no
+  training task uses, L2 tasks on training layouts, L3 tasks on non-training layouts;
 - repertoire: every test behaviour is performed by some training task (recomputed here,
   independently of generation);
 - ambiguity: every instruction grounds to one and the same behaviour on its layout at the
@@ -32,29 +34,63 @@ def _identifiers(spec: Spec) -> set[str]:
     return {n for n in names if n.lower() not in VOCABULARY}
 
 
-def leakage(spec: Spec, splits: Splits) -> list[dict]:
-    findings = []
-    training_pairs = {(t.scene, t.layout, lf.to_json(f)) for t in spec.tasks for f in t.forms}
-    training_forms = {form for _, _, form in training_pairs}
-    training_strings = {p for t in spec.tasks for p in t.paraphrases}
-    identifiers = sorted(_identifiers(spec), key=len, reverse=True)
-    pattern = re.compile(r"\b(" + "|".join(map(re.escape, identifiers)) + r")\b",
-                         re.IGNORECASE) if identifiers else None
-    for task in splits.tasks:
-        form = lf.to_json(task.form)
-        if task.level != "L0" and (task.scene, task.layout, form) in training_pairs:
-            findings.append({"task": task.id, "finding": "its (layout, form) pair is a "
-                                                         "training pair"})
-        if task.level in ("L2", "L3") and form in training_forms:
-            findings.append({"task": task.id, "finding": "its form is a training form"})
-        if task.level == "L1" and task.instruction not in training_strings:
-            findings.append({"task": task.id, "finding": "its instruction is not a training "
-                                                         "instruction"})
-        named = pattern.search(task.instruction) if pattern else None
+class TrainingFacts:
+    """What the training tasks fix, for the leakage and level checks of any test task
+    (`form` is a logical form's canonical JSON)."""
+
+    def __init__(self, spec: Spec):
+        self.pairs = {(t.scene, t.layout, lf.to_json(f)) for t in spec.tasks for f in t.forms}
+        self.forms = {form for _, _, form in self.pairs}
+        self.instructions = {p for t in spec.tasks for p in t.paraphrases}
+        self.layouts = {(t.scene, t.layout) for t in spec.tasks}
+        identifiers = sorted(_identifiers(spec), key=len, reverse=True)
+        self.pattern = re.compile(r"\b(" + "|".join(map(re.escape, identifiers)) + r")\b",
+                                  re.IGNORECASE) if identifiers else None
+
+    def leakage(self, level: str, scene: str, layout: str, form: str,
+                instruction: str) -> list[str]:
+        found = []
+        if level != "L0" and (scene, layout, form) in self.pairs:
+            found.append("its (layout, form) pair is a training pair")
+        if level in ("L2", "L3") and form in self.forms:
+            found.append("its form is a training form")
+        named = self.pattern.search(instruction) if self.pattern else None
         if named:
-            findings.append({"task": task.id, "finding": f"its instruction names the spec "
-                                                         f"identifier {named.group(0)!r}"})
-    return findings
+            found.append(f"its instruction names the spec identifier {named.group(0)!r}")
+        return found
+
+    def level_problems(self, level: str, scene: str, layout: str, form: str,
+                       instruction: str) -> list[str]:
+        on_training_layout = (scene, layout) in self.layouts
+        found = []
+        if level == "L0" and (scene, layout, form) not in self.pairs:
+            found.append("an L0 task is a training pair, but no training task asks this on "
+                         f"{layout}")
+        if level in ("L1", "L3") and on_training_layout:
+            found.append(f"an {level} task is on a layout no training task uses, but training "
+                         f"tasks use {layout}")
+        if level == "L1" and instruction not in self.instructions:
+            found.append("an L1 task's instruction is a training instruction, but this one is "
+                         "not")
+        if level == "L2" and not on_training_layout:
+            found.append(f"an L2 task is on a training layout, but no training task uses "
+                         f"{layout}")
+        return found
+
+
+def _split_findings(spec: Spec, splits: Splits, check: str) -> list[dict]:
+    facts = TrainingFacts(spec)
+    return [{"task": task.id, "finding": finding} for task in splits.tasks
+            for finding in getattr(facts, check)(task.level, task.scene, task.layout,
+                                                 lf.to_json(task.form), task.instruction)]
+
+
+def leakage(spec: Spec, splits: Splits) -> list[dict]:
+    return _split_findings(spec, splits, "leakage")
+
+
+def level_inconsistencies(spec: Spec, splits: Splits) -> list[dict]:
+    return _split_findings(spec, splits, "level_problems")
 
 
 def repertoire_violations(spec: Spec, training: dict[str, Behaviour],
@@ -98,11 +134,15 @@ def audit(spec: Spec, training: dict[str, Behaviour], splits: Splits) -> dict:
         "groups": groups,
         "counts": counts,
         "leakage": leakage(spec, splits),
+        "level_inconsistencies": level_inconsistencies(spec, splits),
         "repertoire_violations": repertoire_violations(spec, training, splits),
         "ambiguities": ambiguities(spec, training, splits),
         "rejected": len(splits.rejected),
     }
 
 
+FINDING_KEYS = ("leakage", "level_inconsistencies", "repertoire_violations", "ambiguities")
+
+
 def findings(report: dict) -> int:
-    return sum(len(report[k]) for k in ("leakage", "repertoire_violations", "ambiguities"))
+    return sum(len(report[k]) for k in FINDING_KEYS)

@@ -1,0 +1,311 @@
+"""Auditing a list of test tasks, ours or another benchmark's, against the scenes and training
+tasks of a spec.
+
+Each task (id, scene, level, layout, instruction, optional `expect` in the compiled episodes'
+`behaviour` fields) is checked the way the compiler checks its own candidates:
+
+parse         the instruction does not parse (with the column)
+no-referent   a description names nothing on the layout (with what is there)
+ambiguous     a description fits several bodies, at the nominal positions or at a jitter
+              extreme (with the candidates and their distances)
+expectation   grounded on the layout, the words select another behaviour than `expect` states
+repertoire    no training task performs the behaviour (arm x action x objects x route x yaw)
+leakage       as in the split audit: training pairs or forms, spec identifiers in the words
+level         the task is not what its level claims (L0 training pairs, L1 training
+              instructions on new layouts, L2 training layouts, L3 new layouts)
+invalid       an unknown scene, layout or level
+"""
+
+from __future__ import annotations
+
+import math
+
+from pydantic import BaseModel, ConfigDict, ValidationError
+
+from robofollow.compiler import lf
+from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.grounding import Grounder, GroundingError
+from robofollow.compiler.parser import parse
+from robofollow.compiler.spec import LEVELS, Spec
+from robofollow.compiler.splits import signature
+from robofollow.compiler.training import describe
+from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
+from robofollow.errors import InstructionError, RoboFollowError
+from robofollow.oracle.audit import TrainingFacts
+
+FINDING_KINDS = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "repertoire",
+                 "leakage", "level")
+STEP_FIELDS = ("action", "arm", "source", "relation", "target", "waypoints", "yaw_degrees")
+
+
+class ListedTask(BaseModel):
+    """One line of a task list."""
+    model_config = ConfigDict(extra="forbid")
+    id: str
+    scene: str
+    level: str
+    layout: str
+    instruction: str
+    expect: dict | None = None
+
+
+class TaskAuditor:
+    def __init__(self, spec: Spec, training: dict[str, Behaviour]):
+        self.spec, self.training = spec, training
+        self.facts = TrainingFacts(spec)
+        self.repertoires = {scene.id: {signature(training[t.label], World(scene, t.layout))
+                                       for t in scene.tasks} for scene in spec.scenes.values()}
+        self.grounders: dict[tuple[str, str], list[Grounder]] = {}
+
+    def audit(self, task: ListedTask) -> list[dict]:
+        found = [{"id": task.id, "kind": kind, "message": message}
+                 for kind, message in self._check(task)]
+        return found
+
+    def _check(self, task: ListedTask):
+        scene = self.spec.scenes.get(task.scene)
+        if scene is None:
+            yield "invalid", f"no scene {task.scene!r} (scenes: {', '.join(self.spec.scenes)})"
+            return
+        if task.layout not in scene.layouts:
+            yield "invalid", (f"{task.scene} has no layout {task.layout!r} (layouts: "
+                              f"{', '.join(scene.layouts)})")
+            return
+        if task.level not in LEVELS:
+            yield "invalid", f"no level {task.level!r} (levels: {', '.join(LEVELS)})"
+            return
+        try:
+            form = parse(task.instruction)
+        except InstructionError as error:
+            yield "parse", f"column {error.column}: {error.message}"
+            return
+        form_json = lf.to_json(form)
+        for message in self.facts.leakage(task.level, task.scene, task.layout, form_json,
+                                          task.instruction):
+            yield "leakage", message
+        for message in self.facts.level_problems(task.level, task.scene, task.layout,
+                                                 form_json, task.instruction):
+            yield "level", message
+        grounders = self._grounders(task.scene, task.layout)
+        try:
+            behaviour = grounders[0].behaviour(form)
+        except GroundingError as error:
+            yield _grounding_kind(error), _grounding_message(error, grounders[0].world)
+            return
+        for case, grounder in enumerate(grounders[1:], start=1):
+            problem = _jitter_problem(form, grounder, behaviour, case)
+            if problem:
+                yield "ambiguous", problem
+                break
+        expect = None
+        if task.expect is not None:
+            try:
+                expect = _expectation(task.expect)
+            except (ValidationError, ValueError) as error:
+                yield "invalid", f"expect: {_first_error(error)}"
+                return
+        behaviour = self._fill_arms(behaviour, expect, scene.id, grounders[0].world)
+        if expect is not None:
+            mismatch = _mismatch(behaviour, expect)
+            if mismatch:
+                yield "expectation", mismatch
+        world = grounders[0].world
+        if signature(behaviour, world) not in self.repertoires[scene.id]:
+            yield "repertoire", self._outside(behaviour, scene.id, world)
+
+    def _grounders(self, scene: str, layout: str) -> list[Grounder]:
+        key = (scene, layout)
+        if key not in self.grounders:
+            self.grounders[key] = [Grounder(w) for w in jitter_worlds(self.spec.scenes[scene],
+                                                                       layout)]
+        return self.grounders[key]
+
+    def _fill_arms(self, behaviour: Behaviour, expect: dict | None, scene: str,
+                   world: World) -> Behaviour:
+        """Unnamed arms: the expectation's, else the one arm training uses for those steps."""
+        steps = list(behaviour.steps)
+        wanted = (expect or {}).get("steps") or []
+        for index, step in enumerate(steps):
+            if step.arm is not None:
+                continue
+            arm = wanted[index].get("arm") if index < len(wanted) else None
+            if arm is None:
+                arms = {entry[index][0] for entry in self.repertoires[scene]
+                        if len(entry) == len(steps) and entry[index][1:] == signature(
+                            Behaviour(steps=(step,)), world)[0][1:]}
+                arm = arms.pop() if len(arms) == 1 else None
+            steps[index] = step.model_copy(update={"arm": arm})
+        return behaviour.model_copy(update={"steps": tuple(steps)})
+
+    def _outside(self, behaviour: Behaviour, scene: str, world: World) -> str:
+        """Why the behaviour is outside the repertoire, naming the nearest training use."""
+        performed = signature(behaviour, world)
+        for entry in self.repertoires[scene]:
+            if len(entry) == len(performed) and all(
+                    a[1:] == b[1:] for a, b in zip(entry, performed, strict=True)):
+                arms = ", ".join(s[0] or "?" for s in entry)
+                return (f"{describe(behaviour)}: training does this only with the "
+                        f"{arms} arm{'s' if len(entry) > 1 else ''}")
+        return f"no training task performs {describe(behaviour)}"
+
+
+def _grounding_kind(error: GroundingError) -> str:
+    return "ambiguous" if error.code == "ambiguous" else "no-referent"
+
+
+def _grounding_message(error: GroundingError, world: World) -> str:
+    if error.code == "ambiguous" and error.candidates:
+        return f"{error.message} ({_distances(error, world)})"
+    if error.code == "no-referent" and error.ref is not None:
+        kinds = sorted({b for b in world.bodies if world.bodies[b].kind == error.ref.noun})
+        there = f"; the layout's {error.ref.noun}s: {', '.join(kinds)}" if kinds else ""
+        return error.message + there
+    return error.message
+
+
+def _distances(error: GroundingError, world: World) -> str:
+    """How far apart the candidates are, by what decided between them."""
+    ref, candidates = error.ref, error.candidates
+    extreme = next((c for c in (ref.constraints if ref else ())
+                    if isinstance(c, lf.ExtremeIs)), None)
+    if extreme is not None:
+        axis, _ = EXTREME_AXES[extreme.extreme]
+        name = "xy"[axis]
+        return ", ".join(f"{b} at {name} = {100 * (world.poses[b].x, world.poses[b].y)[axis]:.1f}"
+                         f" cm" for b in candidates)
+    related = next((c for c in (ref.constraints if ref else ())
+                    if isinstance(c, lf.Related)), None)
+    if related is not None:
+        try:
+            anchor = world.poses[Grounder(world).resolve(related.landmark)]
+        except GroundingError:
+            anchor = None
+        if anchor is not None:
+            return ", ".join(f"{b} {100 * _apart(world, b, anchor):.1f} cm away"
+                             for b in candidates)
+    return ", ".join(f"{b} at ({100 * world.poses[b].x:.1f}, {100 * world.poses[b].y:.1f}) cm"
+                     for b in candidates)
+
+
+def _apart(world: World, body: str, anchor) -> float:
+    pose = world.poses[body]
+    return math.hypot(pose.x - anchor.x, pose.y - anchor.y)
+
+
+def _jitter_problem(form: lf.Instruction, grounder: Grounder, nominal: Behaviour,
+                    case: int) -> str | None:
+    try:
+        found = grounder.behaviour(form)
+    except GroundingError as error:
+        return (f"at jitter extreme {case}: {error.message} "
+                f"({_distances(error, grounder.world)})" if error.candidates
+                else f"at jitter extreme {case}: {error.message}")
+    objects = [(s.source, s.target) for s in nominal.steps]
+    changed = [(s.source, s.target) for s in found.steps]
+    if changed != objects:
+        return (f"at jitter extreme {case} it picks {_objects(changed)} instead of "
+                f"{_objects(objects)}")
+    return None
+
+
+def _objects(pairs: list[tuple]) -> str:
+    return ", ".join("/".join(b for b in pair if b) for pair in pairs)
+
+
+def _expectation(expect: dict) -> dict:
+    """The expectation, checked: known fields only; waypoints as [mode, body] pairs."""
+    unknown = set(expect) - {"steps", "branch", "condition", "other"}
+    if unknown:
+        raise ValueError(f"unknown fields {', '.join(sorted(unknown))} (known: steps, branch, "
+                         "condition, other)")
+    steps = expect.get("steps", [])
+    if not isinstance(steps, list) or not all(isinstance(s, dict) for s in steps):
+        raise ValueError("steps must be a list of objects")
+    for step in steps:
+        extra = set(step) - set(STEP_FIELDS)
+        if extra:
+            raise ValueError(f"unknown step fields {', '.join(sorted(extra))} (known: "
+                             f"{', '.join(STEP_FIELDS)})")
+    return expect
+
+
+def _first_error(error: Exception) -> str:
+    return str(error).splitlines()[0]
+
+
+def _mismatch(behaviour: Behaviour, expect: dict) -> str | None:
+    """How the grounded behaviour differs from the fields the expectation states."""
+    data = behaviour.model_dump(mode="json")
+    for key in ("branch", "condition", "other"):
+        if key in expect and _normal(expect[key]) != _normal(data[key]):
+            return (f"the words select {key} {data[key]!r}; the expectation says "
+                    f"{expect[key]!r}")
+    wanted = expect.get("steps")
+    if wanted is None:
+        return None
+    if len(wanted) != len(behaviour.steps):
+        return (f"the words select {len(behaviour.steps)} step(s) ({describe(behaviour)}); "
+                f"the expectation states {len(wanted)}")
+    for index, (got, want) in enumerate(zip(data["steps"], wanted, strict=True), start=1):
+        for field in STEP_FIELDS:
+            if field in want and _normal(want[field]) != _normal(got[field]):
+                where = f"step {index}'s " if len(wanted) > 1 else ""
+                return (f"the words select {where}{field} {_shown(got[field])}; the "
+                        f"expectation says {_shown(want[field])} ({describe(behaviour)})")
+    return None
+
+
+def _normal(value):
+    """JSON values compared as data: waypoint pairs as a sorted list, objects by their keys."""
+    if isinstance(value, dict):
+        return {k: _normal(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        items = [_normal(v) for v in value]
+        return sorted(items) if items and all(isinstance(v, list) for v in items) else items
+    return value
+
+
+def _shown(value) -> str:
+    if isinstance(value, list):
+        return ", ".join(" ".join(map(str, v)) if isinstance(v, list) else str(v)
+                         for v in value) or "none"
+    return str(value)
+
+
+def read_task_list(path) -> list[ListedTask]:
+    """The tasks of a JSON Lines file; a bad line is an error naming file:line."""
+    try:
+        lines = path.read_text(encoding="utf-8").splitlines()
+    except OSError as error:
+        raise RoboFollowError(f"cannot read {path}: {error.strerror}") from None
+    tasks, seen = [], {}
+    for number, line in enumerate(lines, start=1):
+        if not line.strip():
+            continue
+        try:
+            task = ListedTask.model_validate_json(line)
+        except ValidationError as error:
+            problems = "; ".join(f"{'.'.join(map(str, p['loc'])) or 'line'}: {p['msg']}"
+                                 for p in error.errors())
+            raise RoboFollowError(f"{path}:{number}: {problems}") from None
+        if task.id in seen:
+            raise RoboFollowError(f"{path}:{number}: id {task.id!r} is also on line "
+                                  f"{seen[task.id]}")
+        seen[task.id] = number
+        tasks.append(task)
+    return tasks
+
+
+def audit_task_list(spec: Spec, training: dict[str, Behaviour],
+                    tasks: list[ListedTask]) -> dict:
+    """{"checked": n, "findings": [{id, kind, message}, ...]} in task order."""
+    auditor = TaskAuditor(spec, training)
+    return {"checked": len(tasks),
+            "findings": [finding for task in tasks for finding in auditor.audit(task)]}
+
+
+def task_list(splits) -> list[dict]:
+    """A compiled benchmark's test tasks as a task list (expect = the compiled behaviour)."""
+    return [{"id": t.id, "scene": t.scene, "level": t.level, "layout": t.layout,
+             "instruction": t.instruction, "expect": t.behaviour.model_dump(mode="json")}
+            for t in splits.tasks]

@@ -1,0 +1,134 @@
+"""Auditing task lists: every finding kind from a hand-written list, the compiled benchmark's
+own tasks audited back with no finding, and the `robofollow audit --tasks` output."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from robofollow.cli import main
+from robofollow.oracle.task_audit import (
+    FINDING_KINDS,
+    ListedTask,
+    audit_task_list,
+    read_task_list,
+    task_list,
+)
+from robofollow.resources import builtin_specs
+from tests.sim_helpers import benchmark
+
+
+def _task(task_id: str, scene: str, level: str, layout: str, instruction: str,
+          expect: dict | None = None) -> dict:
+    return {"id": task_id, "scene": scene, "level": level, "layout": layout,
+            "instruction": instruction, **({"expect": expect} if expect else {})}
+
+
+LEFT_BOWL = "Use your right arm to place the blue cylinder in the leftmost bowl."
+TASKS = [
+    _task("typo", "scene2", "L2", "default", "Use your left arm to pik up the red cylinder."),
+    _task("nothing", "scene2", "L2", "default", "Use your left arm to pick up the purple cube."),
+    _task("two-cubes", "scene2", "L2", "default", "Use your left arm to pick up the cube."),
+    _task("jitter", "scene1", "L2", "default",
+          "Use your left arm to pick up the object to the right of the red sphere."),
+    # the default layout's left bowl is green; scene2_5 swaps the bowls
+    _task("swapped", "scene2", "L3", "scene2_5", LEFT_BOWL, {"steps": [
+        {"action": "place", "arm": "right", "source": "small_blue_cylinder", "relation": "in",
+         "target": "green_bowl"}]}),
+    _task("other-arm", "scene2", "L2", "default",
+          "Use your right arm to pick up the red cylinder."),
+    _task("copied", "scene2", "L2", "default", "Use your left arm to pick up the red cylinder."),
+    _task("new-layout-l2", "scene2", "L2", "scene2_1",
+          "Use your left arm to grab the blue cylinder."),
+    _task("rephrased-l1", "scene2", "L1", "scene2_1",
+          "Use your left arm to grab the blue cylinder."),
+    _task("where", "scene2", "L2", "nowhere", "Use your left arm to grab the blue cylinder."),
+    _task("fine", "scene2", "L2", "default", LEFT_BOWL, {"steps": [
+        {"action": "place", "arm": "right", "source": "small_blue_cylinder", "target":
+         "green_bowl"}]}),
+]
+
+
+@pytest.fixture(scope="module")
+def findings() -> dict[str, list[tuple[str, str]]]:
+    compiled = benchmark()
+    listed = [ListedTask(**task) for task in TASKS]
+    result = audit_task_list(compiled.spec, compiled.training, listed)
+    assert result["checked"] == len(TASKS)
+    grouped: dict[str, list] = {task["id"]: [] for task in TASKS}
+    for finding in result["findings"]:
+        grouped[finding["id"]].append((finding["kind"], finding["message"]))
+    return grouped
+
+
+def test_every_kind_of_finding_is_reported(findings):
+    kinds = {kind for items in findings.values() for kind, _ in items}
+    assert kinds == set(FINDING_KINDS)
+
+
+@pytest.mark.parametrize("task_id, kind, words", [
+    ("typo", "parse", "column 22: unknown word 'pik'"),
+    ("nothing", "no-referent", "the layout's cubes: large_blue_cube, small_red_cube"),
+    ("two-cubes", "ambiguous", "large_blue_cube at (-14.0, -13.0) cm"),
+    ("jitter", "ambiguous", "at jitter extreme 5: object[right_of(sphere[red])] could be any of "
+                            "yellow_block_1, green_sphere"),
+    ("swapped", "expectation", "the words select target yellow_bowl; the expectation says "
+                               "green_bowl"),
+    ("other-arm", "repertoire", "pick right large_red_cylinder: training does this only with "
+                                "the left arm"),
+    ("copied", "leakage", "its form is a training form"),
+    ("new-layout-l2", "level", "an L2 task is on a training layout"),
+    ("rephrased-l1", "level", "an L1 task's instruction is a training instruction"),
+    ("where", "invalid", "scene2 has no layout 'nowhere'"),
+])
+def test_each_task_gets_its_finding_with_an_explanation(findings, task_id, kind, words):
+    assert [k for k, _ in findings[task_id]].count(kind) >= 1
+    assert any(words in message for k, message in findings[task_id] if k == kind), \
+        findings[task_id]
+
+
+def test_findings_stay_with_their_cause(findings):
+    assert [k for k, _ in findings["swapped"]] == ["expectation"]
+    assert [k for k, _ in findings["jitter"]] == ["ambiguous"]  # fine at the nominal positions
+    assert [k for k, _ in findings["other-arm"]] == ["repertoire"]
+    assert findings["fine"] == []
+
+
+def test_the_compiled_benchmark_audits_back_without_findings():
+    compiled = benchmark()
+    exported = task_list(compiled.splits)
+    assert len(exported) == len(compiled.splits.tasks)
+    result = audit_task_list(compiled.spec, compiled.training,
+                             [ListedTask(**json.loads(json.dumps(t))) for t in exported])
+    assert result == {"checked": len(exported), "findings": []}
+
+
+def test_the_cli_exports_audits_and_groups_findings(tmp_path, capsys):
+    specs = str(builtin_specs())
+    exported = tmp_path / "tasks.jsonl"
+    assert main(["audit", specs, "--export-tasks", str(exported), "--tasks",
+                 str(exported)]) == 0
+    assert "710 tasks checked, no findings" in capsys.readouterr().out
+    listed = tmp_path / "mine.jsonl"
+    listed.write_text("".join(json.dumps(t) + "\n" for t in TASKS[:3]))
+    assert main(["audit", specs, "--tasks", str(listed)]) == 1
+    text = capsys.readouterr().out
+    assert "3 tasks checked, 3 findings" in text and "ambiguous: 1\n  two-cubes: cube" in text
+    assert main(["audit", specs, "--tasks", str(listed), "--json"]) == 1
+    report = json.loads(capsys.readouterr().out)
+    assert report["checked"] == 3 and [f["kind"] for f in report["findings"]] == [
+        "parse", "no-referent", "ambiguous"]
+    assert "scene_entropy_bits" in report  # the audit object, extended
+
+
+@pytest.mark.parametrize("line, message", [
+    ('{"id": "a", "scene": "scene2"}', ":2: level: Field required; layout: Field required"),
+    ("{oops", ":2: line: Invalid JSON"),
+    (json.dumps(TASKS[0]), ":2: id 'typo' is also on line 1"),
+])
+def test_bad_task_list_lines_are_named(tmp_path, line, message):
+    path = tmp_path / "bad.jsonl"
+    path.write_text(json.dumps(TASKS[0]) + "\n" + line + "\n")
+    with pytest.raises(Exception, match=message):
+        read_task_list(path)
