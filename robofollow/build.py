@@ -28,6 +28,7 @@ from robofollow.compiler.training import check_training
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
 from robofollow.oracle.audit import FINDING_KEYS, audit, findings
+from robofollow.oracle.task_audit import listed_tests
 
 
 @dataclass
@@ -64,6 +65,7 @@ def _compile(specs: Path | list[Path]) -> Compiled:
     spec = load_spec(specs)
     training = check_training(spec)
     splits = generate(spec, training)
+    splits = splits.model_copy(update={"tasks": splits.tasks + listed_tests(spec, training)})
     return Compiled(spec, splits, audit(spec, training, splits), training)
 
 

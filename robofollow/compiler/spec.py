@@ -92,6 +92,23 @@ class Task(Model):
     paraphrase_sources: tuple[Source, ...]
 
 
+class ListedTest(Model):
+    """A test task its author lists in a level: `test L2 name on layout { "..." expect ... }`."""
+
+    name: str
+    scene: str
+    level: Level
+    layout: str
+    instruction: str
+    expect: Expected | None = None
+    source: Source
+    instruction_source: Source
+
+    @property
+    def id(self) -> str:
+        return f"{self.scene}/{self.level}/{self.name}"
+
+
 class SplitRule(Model):
     level: Level
     layouts: tuple[str, ...] = ()
@@ -110,6 +127,7 @@ class Scene(Model):
     layouts: dict[str, Layout]
     tasks: tuple[Task, ...]
     splits: dict[str, SplitRule]
+    tests: tuple[ListedTest, ...] = ()
     table_height: float = 0.74
 
     def jitter_of(self, body: str) -> Jitter:

@@ -20,6 +20,7 @@ from robofollow.compiler.spec import (
     Body,
     Expected,
     Jitter,
+    ListedTest,
     Layout,
     Placed,
     Scene,
@@ -87,6 +88,7 @@ class _Loader:
         self.lines: dict[str, list[str]] = {}
         self.file = ""
         self.labels: dict[str, Token] = {}
+        self.tests: dict[str, Token] = {}  # test id -> its name token
 
     # ---------------------------------------------------------------- errors
     def error(self, code: str, message: str, where: Token | Tree | Source, length: int | None = None):
@@ -187,6 +189,8 @@ class _Loader:
         defined = set(resolver.raw)  # a layout that failed to resolve is reported once, there
         tasks = tuple(t for t in (self.task(item, str(name), bodies, defined)
                                   for item in by_kind.get("task", [])) if t is not None)
+        tests = tuple(t for t in (self.test(item, str(name), bodies, defined)
+                                  for item in by_kind.get("test", [])) if t is not None)
         splits = {}
         for item in by_kind.get("split", []):
             rule = self.split(item, defined)
@@ -196,7 +200,8 @@ class _Loader:
         if len(self.errors) > errors_before:
             return None
         return Scene(id=str(name), title=title[1:-1], bodies=bodies, points=points, jitter=jitter,
-                     layouts=layouts, tasks=tasks, splits=splits, table_height=table)
+                     layouts=layouts, tasks=tasks, splits=splits, tests=tests,
+                     table_height=table)
 
     def setting(self, item: Tree, settings: dict[str, float]) -> None:
         name, value = item.children
@@ -323,6 +328,33 @@ class _Loader:
                     paraphrases=tuple(s[1:-1] for s in strings), forms=tuple(forms),
                     expect=expected, source=self.source(label),
                     paraphrase_sources=tuple(self.source(s) for s in strings))
+
+    def test(self, item: Tree, scene: str, bodies: dict[str, Body],
+             layouts: set[str]) -> ListedTest | None:
+        level, name, layout, string, *rest = item.children
+        ok = True
+        test_id = f"{scene}/{level}/{name}"
+        if test_id in self.tests:
+            self.error("duplicate-test", f"test {name!s} of {level!s} is already defined (line "
+                                         f"{self.tests[test_id].line})", name)
+            ok = False
+        self.tests.setdefault(test_id, name)
+        if layout not in layouts:
+            self.error("undefined-layout", f"no layout named {layout!s} in {scene}", layout)
+            ok = False
+        try:
+            parse(string[1:-1])
+        except InstructionError as error:
+            self.error(f"instruction-{error.code}", error.message,
+                       Source(file=self.file, line=string.line,
+                              column=string.column + error.column), error.length)
+            ok = False
+        expected = self.expected(rest[0], bodies) if rest else None
+        if not ok or (rest and expected is None):
+            return None
+        return ListedTest(name=str(name), scene=scene, level=str(level), layout=str(layout),
+                          instruction=string[1:-1], expect=expected, source=self.source(name),
+                          instruction_source=self.source(string))
 
     def expected(self, node: Tree, bodies: dict[str, Body]) -> Expected | None:
         branch = None

@@ -19,6 +19,7 @@ invalid       an unknown scene, layout or level
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from pydantic import BaseModel, ConfigDict, ValidationError
 
@@ -27,10 +28,11 @@ from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import Grounder, GroundingError
 from robofollow.compiler.parser import parse
 from robofollow.compiler.spec import LEVELS, Spec
-from robofollow.compiler.splits import signature
+from robofollow.compiler.spec_loader import spec_error
+from robofollow.compiler.splits import TestTask, signature
 from robofollow.compiler.training import describe
 from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
-from robofollow.errors import InstructionError, RoboFollowError
+from robofollow.errors import InstructionError, RoboFollowError, SpecErrors
 from robofollow.oracle.audit import TrainingFacts
 
 FINDING_KINDS = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "repertoire",
@@ -49,6 +51,13 @@ class ListedTask(BaseModel):
     expect: dict | None = None
 
 
+@dataclass
+class Examination:
+    findings: list[tuple[str, str]]  # (kind, message)
+    form: lf.Instruction | None
+    behaviour: Behaviour | None  # grounded on the nominal layout, arms filled
+
+
 class TaskAuditor:
     def __init__(self, spec: Spec, training: dict[str, Behaviour]):
         self.spec, self.training = spec, training
@@ -58,60 +67,64 @@ class TaskAuditor:
         self.grounders: dict[tuple[str, str], list[Grounder]] = {}
 
     def audit(self, task: ListedTask) -> list[dict]:
-        found = [{"id": task.id, "kind": kind, "message": message}
-                 for kind, message in self._check(task)]
-        return found
+        return [{"id": task.id, "kind": kind, "message": message}
+                for kind, message in self.examine(task).findings]
 
-    def _check(self, task: ListedTask):
+    def examine(self, task: ListedTask) -> Examination:
+        """The findings, and the form and behaviour as far as the task gets."""
+        found: list[tuple[str, str]] = []
+        form = behaviour = None
         scene = self.spec.scenes.get(task.scene)
         if scene is None:
-            yield "invalid", f"no scene {task.scene!r} (scenes: {', '.join(self.spec.scenes)})"
-            return
+            found.append(("invalid", f"no scene {task.scene!r} (scenes: "
+                                     f"{', '.join(self.spec.scenes)})"))
+            return Examination(found, form, behaviour)
         if task.layout not in scene.layouts:
-            yield "invalid", (f"{task.scene} has no layout {task.layout!r} (layouts: "
-                              f"{', '.join(scene.layouts)})")
-            return
+            found.append(("invalid", f"{task.scene} has no layout {task.layout!r} (layouts: "
+                                     f"{', '.join(scene.layouts)})"))
+            return Examination(found, form, behaviour)
         if task.level not in LEVELS:
-            yield "invalid", f"no level {task.level!r} (levels: {', '.join(LEVELS)})"
-            return
+            found.append(("invalid", f"no level {task.level!r} (levels: {', '.join(LEVELS)})"))
+            return Examination(found, form, behaviour)
         try:
             form = parse(task.instruction)
         except InstructionError as error:
-            yield "parse", f"column {error.column}: {error.message}"
-            return
+            found.append(("parse", f"column {error.column}: {error.message}"))
+            return Examination(found, form, behaviour)
         form_json = lf.to_json(form)
         for message in self.facts.leakage(task.level, task.scene, task.layout, form_json,
                                           task.instruction):
-            yield "leakage", message
+            found.append(("leakage", message))
         for message in self.facts.level_problems(task.level, task.scene, task.layout,
                                                  form_json, task.instruction):
-            yield "level", message
+            found.append(("level", message))
         grounders = self._grounders(task.scene, task.layout)
         try:
             behaviour = grounders[0].behaviour(form)
         except GroundingError as error:
-            yield _grounding_kind(error), _grounding_message(error, grounders[0].world)
-            return
+            found.append((_grounding_kind(error), _grounding_message(error, grounders[0].world)))
+            return Examination(found, form, behaviour)
         for case, grounder in enumerate(grounders[1:], start=1):
             problem = _jitter_problem(form, grounder, behaviour, case)
             if problem:
-                yield "ambiguous", problem
+                found.append(("ambiguous", problem))
                 break
         expect = None
         if task.expect is not None:
             try:
                 expect = _expectation(task.expect)
-            except (ValidationError, ValueError) as error:
-                yield "invalid", f"expect: {_first_error(error)}"
-                return
+            except ValueError as error:
+                found.append(("invalid", f"expect: {error}"))
+                return Examination(found, form, behaviour)
         behaviour = self._fill_arms(behaviour, expect, scene.id, grounders[0].world)
         if expect is not None:
             mismatch = _mismatch(behaviour, expect)
             if mismatch:
-                yield "expectation", mismatch
+                found.append(("expectation", mismatch))
         world = grounders[0].world
         if signature(behaviour, world) not in self.repertoires[scene.id]:
-            yield "repertoire", self._outside(behaviour, scene.id, world)
+            found.append(("repertoire", self._outside(behaviour, scene.id, world)))
+        return Examination(found, form, behaviour)
 
     def _grounders(self, scene: str, layout: str) -> list[Grounder]:
         key = (scene, layout)
@@ -229,10 +242,6 @@ def _expectation(expect: dict) -> dict:
     return expect
 
 
-def _first_error(error: Exception) -> str:
-    return str(error).splitlines()[0]
-
-
 def _mismatch(behaviour: Behaviour, expect: dict) -> str | None:
     """How the grounded behaviour differs from the fields the expectation states."""
     data = behaviour.model_dump(mode="json")
@@ -309,3 +318,35 @@ def task_list(splits) -> list[dict]:
     return [{"id": t.id, "scene": t.scene, "level": t.level, "layout": t.layout,
              "instruction": t.instruction, "expect": t.behaviour.model_dump(mode="json")}
             for t in splits.tasks]
+
+
+FATAL = ("invalid", "parse", "no-referent", "ambiguous", "expectation")  # for a listed test
+
+
+def listed_tests(spec: Spec, training: dict[str, Behaviour]) -> tuple[TestTask, ...]:
+    """The test tasks spec authors list in their levels, compiled. What would stop a
+    generated candidate (no single referent, also at the jitter extremes, or another behaviour
+    than `expect` states) is a spec error at the test; leakage, level and repertoire problems
+    are left to the split audit, as for generated tasks."""
+    auditor = TaskAuditor(spec, training)
+    tasks, errors = [], []
+    for scene in spec.scenes.values():
+        for test in scene.tests:
+            expect = (None if test.expect is None else
+                      {"branch": test.expect.branch,
+                       "steps": [s.model_dump(mode="json") for s in test.expect.steps]})
+            examined = auditor.examine(ListedTask(id=test.id, scene=test.scene, level=test.level,
+                                                  layout=test.layout,
+                                                  instruction=test.instruction, expect=expect))
+            fatal = [(kind, message) for kind, message in examined.findings if kind in FATAL]
+            if fatal:
+                errors += [spec_error(f"test-{kind}", message, test.source, len(test.name))
+                           for kind, message in fatal]
+                continue
+            tasks.append(TestTask(id=test.id, scene=test.scene, level=test.level,
+                                  layout=test.layout, instruction=test.instruction,
+                                  form=examined.form, behaviour=examined.behaviour,
+                                  origin=test.name, wording="listed"))
+    if errors:
+        raise SpecErrors(errors)
+    return tuple(tasks)
