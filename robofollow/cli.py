@@ -367,12 +367,15 @@ def cmd_serve(args) -> int:
     server_class, scheme = ((TcpPolicyServer, "tcp") if args.protocol == "tcp"
                             else (PolicyServer, "ws"))
     server = server_class(compile_specs(Path(args.specs)), args.policy)
-    print(f"serving {args.policy} on {scheme}://{args.host}:{args.port} (Ctrl-C stops)",
-          flush=True)
+
+    def listening(_) -> None:  # only now can a client connect
+        print(f"serving {args.policy} on {scheme}://{args.host}:{args.port} (Ctrl-C stops)",
+              flush=True)
+
     try:
-        server.serve_forever(args.host, args.port)
+        server.serve_forever(args.host, args.port, ready=listening)
     except KeyboardInterrupt:
-        return 0
+        pass  # Ctrl-C is how a server is stopped
     return 0
 
 
