@@ -3,7 +3,8 @@ episode's layout (nominal poses):
 
 chance            a language-blind guess: Intent and completion expected from performing,
                   uniformly at random, one of the scene's training behaviours the layout allows
-                  (what the blind policy does); its completion is 1/K for K behaviours.
+                  (what the blind policy does); among K behaviours that do not pass each
+                  other's checks its completion is 1/K.
 followed_intent   the Intent earned by perfectly following the instruction the policy was
                   given (1 for the episode's own; with --instruction-mode shuffled, the credit
                   of the stages the other task shares; None when it does not ground).

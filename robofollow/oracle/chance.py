@@ -4,8 +4,9 @@ scoring order with the performed one's by their Intent checks (what, which arm, 
 and relation); Intent is credited while they agree and, as the scorer gates it, not from the
 first that differs. Doing more than asked (an unstack is a pick-up first) still earns the
 finishing stage. A behaviour that passes every Intent check of the asked one counts as
-completing it. A language-blind policy choosing among K equally likely behaviours completes
-the asked one with probability 1/K: the chance level scene entropy H(T|S) implies."""
+completing it. A language-blind policy choosing among K equally likely behaviours, none of
+which passes another's checks, completes the asked one with probability 1/K: the chance level
+scene entropy H(T|S) implies."""
 
 from __future__ import annotations
 
