@@ -86,7 +86,6 @@ def cmd_compile(args) -> int:
 
 def cmd_audit(args) -> int:
     from robofollow.build import clean, compile_specs, summary
-
     from robofollow.data.files import write_jsonl
     from robofollow.oracle.task_audit import audit_task_list, read_task_list, task_list
 

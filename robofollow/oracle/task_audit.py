@@ -21,11 +21,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from pydantic import BaseModel, ConfigDict, ValidationError
+from pydantic import ValidationError
 
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import Grounder, GroundingError
+from robofollow.compiler.model import Model
 from robofollow.compiler.parser import parse
 from robofollow.compiler.spec import LEVELS, Spec
 from robofollow.compiler.spec_loader import spec_error
@@ -40,9 +41,8 @@ FINDING_KINDS = ("invalid", "parse", "no-referent", "ambiguous", "expectation", 
 STEP_FIELDS = ("action", "arm", "source", "relation", "target", "waypoints", "yaw_degrees")
 
 
-class ListedTask(BaseModel):
+class ListedTask(Model):
     """One line of a task list."""
-    model_config = ConfigDict(extra="forbid")
     id: str
     scene: str
     level: str

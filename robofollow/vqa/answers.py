@@ -8,15 +8,13 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict
-
+from robofollow.compiler.model import Model
 from robofollow.compiler.world import World
 
 KIND_WORDS = {"label": "square label"}  # how a body kind is said, where not by its name
 
 
-class Named(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
+class Named(Model):
     color: str
     kind: str
 
@@ -25,10 +23,9 @@ class Named(BaseModel):
         return f"{self.color} {KIND_WORDS.get(self.kind, self.kind)}"
 
 
-class Expected(BaseModel):
+class Expected(Model):
     """`color`: the colour alone; `object`: one object (`needs_color`: a description must
     give the colour too); `sides`: several objects, each with its side."""
-    model_config = ConfigDict(frozen=True, extra="forbid")
     type: Literal["color", "object", "sides"]
     color: str | None = None
     object: Named | None = None

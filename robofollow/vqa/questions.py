@@ -13,10 +13,9 @@ import itertools
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from pydantic import BaseModel, ConfigDict
-
 from robofollow.compiler import lf
 from robofollow.compiler.grounding import Grounder, GroundingError
+from robofollow.compiler.model import Model
 from robofollow.compiler.world import EXTREME_MARGIN, World
 from robofollow.vqa.answers import KIND_WORDS, Expected, Named, named, side_words
 
@@ -28,8 +27,7 @@ EXTREMES = ("leftmost", "rightmost")
 MAX_GROUP = 3  # objects a "which are the red objects" question may list
 
 
-class Question(BaseModel):
-    model_config = ConfigDict(frozen=True, extra="forbid")
+class Question(Model):
     id: str
     template: str
     question: str
