@@ -9,14 +9,7 @@ from robofollow.eval.episode import ACTION_BUDGET, CHUNK_LIMIT, run_episode
 from robofollow.eval.policy import BadActionError, validate_actions
 from robofollow.eval.reference import REFERENCE_POLICIES, BlindPolicy, available_behaviours
 from robofollow.sim import robot
-from robofollow.sim.stage import Stage
 from tests.sim_helpers import benchmark, episode
-
-
-@pytest.fixture(scope="module")
-def stage():
-    with Stage() as shared:
-        yield shared
 
 
 def test_valid_chunks_pass_and_a_single_action_is_a_chunk_of_one():

@@ -22,7 +22,6 @@ from robofollow.eval.reference import ExpertPolicy
 from robofollow.eval.tcp import TcpPolicy, TcpPolicyServer
 from robofollow.resources import builtin_specs
 from robofollow.sim import robot
-from robofollow.sim.stage import Stage
 from tests.sim_helpers import benchmark, episode
 
 EPISODE = "scene2/L0/pickup_left_cube#r1"
@@ -86,12 +85,6 @@ class _Server:
 
     def close(self):
         self.listener.close()
-
-
-@pytest.fixture(scope="module")
-def stage():
-    with Stage() as shared:
-        yield shared
 
 
 @pytest.mark.slow

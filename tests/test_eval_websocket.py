@@ -17,7 +17,6 @@ from robofollow.eval.reference import ExpertPolicy
 from robofollow.eval.websocket import PolicyServer, WebsocketPolicy
 from robofollow.eval.wire import packb, unpackb
 from robofollow.sim import robot
-from robofollow.sim.stage import Stage
 from tests.sim_helpers import benchmark, episode
 
 EPISODE = "scene2/L0/pickup_left_cube#r1"
@@ -38,12 +37,6 @@ def _start(handler) -> tuple[str, object]:
     assert ready.wait(10)
     server = holder["server"]
     return f"ws://127.0.0.1:{server.socket.getsockname()[1]}", server
-
-
-@pytest.fixture(scope="module")
-def stage():
-    with Stage() as shared:
-        yield shared
 
 
 @pytest.mark.slow

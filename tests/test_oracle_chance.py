@@ -13,7 +13,6 @@ from robofollow.eval.episode import run_episode
 from robofollow.eval.instructions import given_instruction
 from robofollow.eval.reference import REFERENCE_POLICIES
 from robofollow.oracle.chance import guessing, intent_if_performed
-from robofollow.sim.stage import Stage
 from tests.sim_helpers import benchmark, episode
 
 TRAINING = benchmark().training
@@ -76,13 +75,10 @@ def test_episode_references_name_the_chance_and_the_followed_instruction():
     "scene3/L0/r_pick2_via4_to6_long_front#r1",
     "scene4/L0/s41_r_pick_green_cylinder_top#r1",
 ])
-def test_the_scorer_gives_the_expert_doing_another_task_the_intent_the_dags_predict(episode_id):
+def test_the_scorer_gives_the_expert_doing_another_task_the_intent_the_dags_predict(stage,
+                                                                                   episode_id):
     record = episode(episode_id)
     instruction = given_instruction(benchmark(), record, "shuffled")
-    stage = Stage()
-    try:
-        run = run_episode(benchmark(), stage, record, REFERENCE_POLICIES["expert"](), instruction)
-    finally:
-        stage.close()
+    run = run_episode(benchmark(), stage, record, REFERENCE_POLICIES["expert"](), instruction)
     expected = references(benchmark(), record, instruction)["followed_intent"]
     assert run.score.intent_score == pytest.approx(expected), (instruction, run.score.stages)
