@@ -36,20 +36,16 @@ def write_probe(compiled: Compiled, scene_id: str, layout: str, out: Path, count
                 seed: int, qa20: bool = False, progress: bool = True) -> list[dict]:
     """Write `count` questions and their images to `out` (with `qa20`: the paper's 20)."""
     scene = compiled.spec.scenes[scene_id]
+    count = len(paper.QA20) if qa20 else count
     (out / "images").mkdir(parents=True, exist_ok=True)
     records: list[dict] = []
     with Stage() as stage, tqdm(total=count, desc="questions", unit="question",
                                 disable=not progress) as bar:
-        image_seed = seed
+        image_seed = None if qa20 else seed  # QA-20: the nominal positions
         while len(records) < count:
-            sim = stage.simulation(scene, layout, render=True)
-            image_seed = None if qa20 else image_seed
-            world = sim.reset(image_seed)
-            if qa20:
-                chosen = [question for question, _ in paper.answer_all(world)]
-            else:
-                chosen = _draw(questions(world), min(PER_IMAGE, count - len(records)),
-                               image_seed)
+            world = stage.simulation(scene, layout, render=True).reset(image_seed)
+            chosen = ([question for question, _ in paper.answer_all(world)] if qa20 else
+                      _draw(questions(world), min(PER_IMAGE, count - len(records)), image_seed))
             if not chosen:
                 raise RoboFollowError(f"{scene_id}/{layout} (seed {image_seed}): no question "
                                       "has a unique answer")
@@ -58,9 +54,7 @@ def write_probe(compiled: Compiled, scene_id: str, layout: str, out: Path, count
             Image.fromarray(stage.cameras.render(CAMERA)).save(out / image)
             records += [_record(q, image, scene_id, layout, image_seed) for q in chosen]
             bar.update(len(chosen))
-            if qa20:
-                break
-            image_seed += 1
+            image_seed = None if qa20 else image_seed + 1
     write_jsonl(out / "questions.jsonl", records)
     write_jsonl(out / "qa_lerobot.jsonl", [
         {f"observation.images.{CAMERA}": r["image"], "task": r["question"],
