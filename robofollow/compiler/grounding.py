@@ -8,6 +8,8 @@ GroundingError that lists the candidates.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 from robofollow.compiler import lf, notation
 from robofollow.compiler.behaviour import Behaviour, Step
 from robofollow.compiler.world import EXTREME_AXES, EXTREME_MARGIN, SIZE_MARGIN, World
@@ -193,19 +195,41 @@ class Grounder:
         return 0.0 if wants_long_axis_on_y == long_axis_on_y else 90.0
 
 
-def instability(form: lf.Instruction, grounders: list[Grounder], expected: Behaviour,
-                first_case: int = 0) -> str | None:
-    """Why `form` fails to ground, or picks other objects than `expected`, in one of the
-    worlds (numbered from `first_case`); None when it means the same in all of them."""
-    objects = [(s.source, s.target) for s in expected.steps]
+@dataclass(frozen=True)
+class Unstable:
+    """The first jittered world where a form stops meaning what it means nominally."""
+    case: int  # the world's number
+    world: World
+    error: GroundingError | None  # it does not ground there, or
+    objects: tuple[tuple[str, str | None], ...] = ()  # the (source, target) it picks instead
+
+
+def first_unstable(form: lf.Instruction, grounders: list[Grounder], expected: Behaviour,
+                   first_case: int = 0) -> Unstable | None:
+    """The first of the worlds (numbered from `first_case`) where `form` fails to ground or
+    picks other objects than `expected`; None when it means the same in all of them."""
+    objects = tuple((s.source, s.target) for s in expected.steps)
     for index, grounder in enumerate(grounders, start=first_case):
         try:
             found = grounder.behaviour(form)
         except GroundingError as error:
-            return f"jitter case {index}: {error.code}: {error.message}"
-        if [(s.source, s.target) for s in found.steps] != objects:
-            return f"jitter case {index} changes the objects it refers to"
+            return Unstable(index, grounder.world, error)
+        picked = tuple((s.source, s.target) for s in found.steps)
+        if picked != objects:
+            return Unstable(index, grounder.world, None, picked)
     return None
+
+
+def instability(form: lf.Instruction, grounders: list[Grounder], expected: Behaviour,
+                first_case: int = 0) -> str | None:
+    """Why `form` fails to ground, or picks other objects than `expected`, in one of the
+    worlds (numbered from `first_case`); None when it means the same in all of them."""
+    unstable = first_unstable(form, grounders, expected, first_case)
+    if unstable is None:
+        return None
+    if unstable.error is not None:
+        return f"jitter case {unstable.case}: {unstable.error.code}: {unstable.error.message}"
+    return f"jitter case {unstable.case} changes the objects it refers to"
 
 
 def ground(instruction: lf.Instruction, world: World) -> Behaviour:

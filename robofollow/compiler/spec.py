@@ -102,7 +102,6 @@ class ListedTest(Model):
     instruction: str
     expect: Expected | None = None
     source: Source
-    instruction_source: Source
 
     @property
     def id(self) -> str:

@@ -353,8 +353,7 @@ class _Loader:
         if not ok or (rest and expected is None):
             return None
         return ListedTest(name=str(name), scene=scene, level=str(level), layout=str(layout),
-                          instruction=string[1:-1], expect=expected, source=self.source(name),
-                          instruction_source=self.source(string))
+                          instruction=string[1:-1], expect=expected, source=self.source(name))
 
     def expected(self, node: Tree, bodies: dict[str, Body]) -> Expected | None:
         branch = None

@@ -77,6 +77,11 @@ def signature(behaviour: Behaviour, world: World) -> tuple:
                   s.yaw_degrees) for s in behaviour.steps)
 
 
+def repertoire(scene: Scene, training: dict[str, Behaviour]) -> set[tuple]:
+    """The signatures of a scene's training behaviours, each on its own layout."""
+    return {signature(training[t.label], World(scene, t.layout)) for t in scene.tasks}
+
+
 def episode_seed(task_id: str, round_index: int, base: int) -> int:
     """The seed of a task's round: fixed by the task id, the round and the split's seed base."""
     offset = int(hashlib.sha256(task_id.encode()).hexdigest()[:8], 16) % 1000
@@ -113,8 +118,7 @@ class _Generator:
         self.training = training
         self.training_forms = training_forms
         self.vocabulary = vocabulary
-        self.repertoire = {signature(training[t.label], World(scene, t.layout))
-                           for t in scene.tasks}
+        self.repertoire = repertoire(scene, training)
         self.tasks: list[TestTask] = []
         self.rejected: list[Rejection] = []
         self.seen: dict[tuple[str, str], str] = {}

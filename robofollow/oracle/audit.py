@@ -20,7 +20,7 @@ from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import Grounder, instability
 from robofollow.compiler.lexicon import VOCABULARY
 from robofollow.compiler.spec import Spec
-from robofollow.compiler.splits import Splits, signature
+from robofollow.compiler.splits import Splits, repertoire, signature
 from robofollow.compiler.world import World, jitter_worlds
 from robofollow.oracle.entropy import entropy_bits, scene_groups
 
@@ -97,10 +97,10 @@ def repertoire_violations(spec: Spec, training: dict[str, Behaviour],
                           splits: Splits) -> list[dict]:
     findings = []
     for scene in spec.scenes.values():
-        repertoire = {signature(training[t.label], World(scene, t.layout)) for t in scene.tasks}
+        performed = repertoire(scene, training)
         for task in splits.of(scene.id, "L0") + splits.of(scene.id, "L1") + splits.of(
                 scene.id, "L2") + splits.of(scene.id, "L3"):
-            if signature(task.behaviour, World(scene, task.layout)) not in repertoire:
+            if signature(task.behaviour, World(scene, task.layout)) not in performed:
                 findings.append({"task": task.id, "finding": "no training task performs "
                                                              "this behaviour"})
     return findings

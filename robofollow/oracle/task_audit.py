@@ -25,12 +25,12 @@ from pydantic import ValidationError
 
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.grounding import Grounder, GroundingError
+from robofollow.compiler.grounding import Grounder, GroundingError, Unstable, first_unstable
 from robofollow.compiler.model import Model
 from robofollow.compiler.parser import parse
 from robofollow.compiler.spec import LEVELS, Spec
 from robofollow.compiler.spec_loader import spec_error
-from robofollow.compiler.splits import TestTask, signature
+from robofollow.compiler.splits import TestTask, repertoire, signature
 from robofollow.compiler.training import describe
 from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
 from robofollow.errors import InstructionError, RoboFollowError, SpecErrors
@@ -62,8 +62,8 @@ class TaskAuditor:
     def __init__(self, spec: Spec, training: dict[str, Behaviour]):
         self.spec, self.training = spec, training
         self.facts = TrainingFacts(spec)
-        self.repertoires = {scene.id: {signature(training[t.label], World(scene, t.layout))
-                                       for t in scene.tasks} for scene in spec.scenes.values()}
+        self.repertoires = {scene.id: repertoire(scene, training)
+                            for scene in spec.scenes.values()}
         self.grounders: dict[tuple[str, str], list[Grounder]] = {}
 
     def audit(self, task: ListedTask) -> list[dict]:
@@ -104,11 +104,9 @@ class TaskAuditor:
         except GroundingError as error:
             found.append((_grounding_kind(error), _grounding_message(error, grounders[0].world)))
             return Examination(found, form, behaviour)
-        for case, grounder in enumerate(grounders[1:], start=1):
-            problem = _jitter_problem(form, grounder, behaviour, case)
-            if problem:
-                found.append(("ambiguous", problem))
-                break
+        unstable = first_unstable(form, grounders[1:], behaviour, first_case=1)
+        if unstable is not None:
+            found.append(("ambiguous", _jitter_problem(unstable, behaviour)))
         expect = None
         if task.expect is not None:
             try:
@@ -143,9 +141,9 @@ class TaskAuditor:
                 continue
             arm = wanted[index].get("arm") if index < len(wanted) else None
             if arm is None:
+                rest = signature(Behaviour(steps=(step,)), world)[0][1:]  # all but the arm
                 arms = {entry[index][0] for entry in self.repertoires[scene]
-                        if len(entry) == len(steps) and entry[index][1:] == signature(
-                            Behaviour(steps=(step,)), world)[0][1:]}
+                        if len(entry) == len(steps) and entry[index][1:] == rest}
                 arm = arms.pop() if len(arms) == 1 else None
             steps[index] = step.model_copy(update={"arm": arm})
         return behaviour.model_copy(update={"steps": tuple(steps)})
@@ -205,20 +203,14 @@ def _apart(world: World, body: str, anchor) -> float:
     return math.hypot(pose.x - anchor.x, pose.y - anchor.y)
 
 
-def _jitter_problem(form: lf.Instruction, grounder: Grounder, nominal: Behaviour,
-                    case: int) -> str | None:
-    try:
-        found = grounder.behaviour(form)
-    except GroundingError as error:
-        return (f"at jitter extreme {case}: {error.message} "
-                f"({_distances(error, grounder.world)})" if error.candidates
-                else f"at jitter extreme {case}: {error.message}")
+def _jitter_problem(unstable: Unstable, nominal: Behaviour) -> str:
+    where = f"at jitter extreme {unstable.case}"
+    error = unstable.error
+    if error is not None:
+        return (f"{where}: {error.message} ({_distances(error, unstable.world)})"
+                if error.candidates else f"{where}: {error.message}")
     objects = [(s.source, s.target) for s in nominal.steps]
-    changed = [(s.source, s.target) for s in found.steps]
-    if changed != objects:
-        return (f"at jitter extreme {case} it picks {_objects(changed)} instead of "
-                f"{_objects(objects)}")
-    return None
+    return f"{where} it picks {_objects(unstable.objects)} instead of {_objects(objects)}"
 
 
 def _objects(pairs: list[tuple]) -> str:
