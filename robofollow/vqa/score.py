@@ -130,7 +130,7 @@ def _score_sides(text: str, expected: Expected) -> Verdict:
     placed: dict[int, str] = {}
     named: set[int] = set()
     for clause in CLAUSE_BREAKS.split(text.lower()):
-        if not clause or not clause.strip():
+        if not clause.strip():
             continue
         objects = [_which(m, expected) for m in mentions(clause)]
         objects = [o for o in objects if o is not None]
@@ -148,10 +148,11 @@ def _score_sides(text: str, expected: Expected) -> Verdict:
             return Verdict(False, f"puts the {thing.text} on the {side}; it is on the "
                                   f"{expected.sides[index]} ({expected.text})")
     if expected.template == "relative" and not placed and len(named) == 1:
-        placed = {next(iter(named)): "left"}  # "Which bowl is on the left?" - "The green one."
-        if expected.sides[next(iter(named))] != "left":
-            return Verdict(False, f"names the {expected.objects[next(iter(named))].text} as "
-                                  f"the left one ({expected.text})")
+        (only,) = named  # "Which bowl is on the left?" - "The green one."
+        if expected.sides[only] != "left":
+            return Verdict(False, f"names the {expected.objects[only].text} as the left one "
+                                  f"({expected.text})")
+        placed = {only: "left"}
     needed = len(expected.objects) - 1
     if expected.template == "property" and len(named) < len(expected.objects):
         missing = [o.text for i, o in enumerate(expected.objects) if i not in named]
