@@ -4,7 +4,8 @@ RUN/run.json        the options (a resumed run must use the same)
 RUN/episodes.jsonl  one line per finished episode, appended as episodes finish (each line is
                     written whole; a line cut by a kill is dropped on resume, so every
                     finished episode is kept exactly once)
-RUN/summary.json    the paper's Table 1 over every line: cells and avg (0-100)
+RUN/summary.json    the paper's Table 1 over every line: cells and avg (0-100), and the
+                    chance and followed-instruction references
 RUN/videos/         mp4s of failed (or all) episodes, with --video
 """
 
