@@ -133,6 +133,16 @@ def _positive(text: str) -> int:
     return value
 
 
+def _seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of seconds, got {text!r}") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"must be a positive number of seconds, got {text}")
+    return value
+
+
 def _size(text: str) -> tuple[int, int]:
     try:
         width, height = (int(v) for v in text.lower().split("x"))
@@ -297,6 +307,7 @@ def cmd_dataset_check(args) -> int:
 
 def cmd_eval(args) -> int:
     from robofollow.build import compile_specs
+    from robofollow.eval.loading import is_server
     from robofollow.eval.report import write_report
     from robofollow.eval.runner import EvalOptions, evaluate
     from robofollow.eval.tables import table_text
@@ -306,9 +317,12 @@ def cmd_eval(args) -> int:
     levels = _names(args.levels, list(LEVELS), "level")
     known_tasks = [t.id for t in compiled.splits.tasks]
     tasks = _names(args.tasks, known_tasks, "task") if args.tasks else []
+    if args.policy_timeout is not None and is_server(args.policy):
+        raise RoboFollowError("--policy-timeout limits in-process policies; a server takes "
+                              "its own: --policy URL?timeout=S&retries=N")
     options = EvalOptions(args.policy, tuple(scenes), tuple(levels), args.rounds,
                           args.instruction_mode, args.video, compiled.spec.digest, tuple(tasks),
-                          args.sample)
+                          args.sample, args.policy_timeout)
     try:
         result = evaluate(compiled, Path(args.out), options, args.workers, args.resume,
                           progress=not args.quiet, executor=args.executor)
@@ -519,6 +533,10 @@ def build_parser() -> argparse.ArgumentParser:
                                           "task's (default: normal)")
     p.add_argument("--video", choices=("none", "failures", "all"), default="none",
                    help="write mp4s of these episodes to RUN/videos (default: none)")
+    p.add_argument("--policy-timeout", type=_seconds, metavar="S",
+                   help="end an episode whose in-process policy takes longer than S seconds "
+                        "over a reset() or act() call, recording why (default: no limit; "
+                        "servers take ?timeout=S&retries=N)")
     p.add_argument("--resume", action="store_true", help="continue an interrupted run")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(handler=cmd_eval)

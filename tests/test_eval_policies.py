@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import signal
+import time
+
 import numpy as np
 import pytest
 
@@ -117,6 +120,45 @@ def test_a_failing_policy_ends_its_episode_with_the_reason_and_is_scored(stage, 
                       policy)
     assert run.steps == steps and run.error.startswith(message)
     assert run.score.intent_score == 0.0
+
+
+class _Hangs:
+    """Answers until its call `hang_at` (0: reset), which sleeps far past any time limit."""
+    uses = frozenset({"state"})
+
+    def __init__(self, hang_at):
+        self.hang_at = hang_at
+
+    def reset(self):
+        self.calls = 0
+        if self.hang_at == 0:
+            time.sleep(600)
+
+    def act(self, observation):
+        self.calls += 1
+        if self.calls == self.hang_at:
+            time.sleep(600)
+        return np.repeat(observation["state"][None], 50, axis=0)
+
+
+@pytest.mark.parametrize("hang_at, steps, message", [
+    (2, 50, "step 50: the policy did not answer within 0.5 s"),
+    (0, 0, "reset: the policy did not answer within 0.5 s"),
+])
+def test_a_policy_that_hangs_past_its_time_limit_ends_its_episode(stage, hang_at, steps,
+                                                                  message):
+    run = run_episode(benchmark(), stage, episode("scene1/L0/pickup_yellow_block_2#r1"),
+                      _Hangs(hang_at), timeout=0.5)
+    assert (run.steps, run.error) == (steps, message)
+    assert run.score.intent_score == 0.0
+    assert signal.getitimer(signal.ITIMER_REAL) == (0.0, 0.0)  # the timer is cleared
+    assert signal.getsignal(signal.SIGALRM) is signal.SIG_DFL  # and the handler restored
+
+
+def test_a_time_limit_leaves_a_policy_within_it_alone(stage):
+    run = run_episode(benchmark(), stage, episode("scene1/L0/pickup_yellow_block_2#r1"),
+                      _Hangs(hang_at=-1), timeout=30)
+    assert (run.steps, run.error) == (ACTION_BUDGET, None)
 
 
 @pytest.mark.slow

@@ -126,6 +126,15 @@ def make_holder():
     return Holder()
 
 
+class Sleeper(Holder):
+    def act(self, observation):
+        time.sleep(600)
+
+
+def make_sleeper():
+    return Sleeper()
+
+
 def not_a_policy():
     return object()
 
@@ -187,3 +196,23 @@ def test_a_sample_keeps_n_tasks_of_every_scene_and_level_spread_over_its_list():
             kept = [e["task"] for e in sampled if (e["scene"], e["level"]) == (scene, level)]
             assert kept == [tasks[0], tasks[len(tasks) // 3], tasks[2 * len(tasks) // 3]]
     assert len(select_episodes(benchmark(), _options(sample=100))) == 16  # fewer tasks: all
+
+
+def test_a_hung_in_process_policy_is_cut_at_its_time_limit_in_the_worker_pool(tmp_path,
+                                                                               capsys):
+    out = tmp_path / "hung"
+    two = "scene2/L0/pickup_left_cube,scene1/L0/pickup_yellow_block_2"
+    args = ["eval", "--policy", "tests.test_eval_runner:make_sleeper", "--out", str(out),
+            "--specs", str(builtin_specs()), "--rounds", "1", "--workers", "2", "--quiet",
+            "--tasks", two, "--policy-timeout", "1"]
+    assert main(args) == 0
+    results = read_results(out / "episodes.jsonl")
+    assert [(r["error"], r["steps"]) for r in results] == [
+        ("step 0: the policy did not answer within 1 s", 0)] * 2
+    assert json.loads((out / "run.json").read_text())["policy_timeout"] == 1.0
+    assert main(["eval", "--policy", "ws://localhost:8000", "--out", str(tmp_path / "ws"),
+                 "--specs", str(builtin_specs()), "--policy-timeout", "5"]) == 1
+    assert "a server takes its own: --policy URL?timeout=S&retries=N" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(args[:-1] + ["0"])
+    assert "must be a positive number of seconds, got 0" in capsys.readouterr().err

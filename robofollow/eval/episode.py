@@ -1,7 +1,8 @@
 """One evaluation episode, as upstream's protocol: reset the episode's layout with its seed,
 then query the policy for action chunks and execute them (at most CHUNK_LIMIT actions of each)
 until the fixed action budget is spent; nothing ends an episode early except a policy failure
-(an exception or invalid actions), which is recorded. The recording is scored by the oracle."""
+(an exception, invalid actions or, with a time limit, a call that runs past it), which is
+recorded. The recording is scored by the oracle."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from robofollow.build import Compiled
+from robofollow.eval.deadline import PolicyTimeout, deadline
 from robofollow.eval.policy import BadActionError, Policy, Privileged, validate_actions
 from robofollow.oracle.results import EpisodeScore
 from robofollow.scoring import score_recording
@@ -46,17 +48,25 @@ def observation(policy: Policy, stage: Stage, instruction: str, steps: int,
     return obs
 
 
+def _failure(failure: Exception) -> str:
+    if isinstance(failure, BadActionError | PolicyTimeout):
+        return str(failure)
+    return f"the policy raised {type(failure).__name__}: {failure}"
+
+
 def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy,
                 instruction: str | None = None, budget: int = ACTION_BUDGET,
-                on_frame=None) -> EpisodeRun:
+                on_frame=None, timeout: float | None = None) -> EpisodeRun:
     """Evaluate `policy` on a compiled episode. `instruction` replaces the episode's (the
-    empty and shuffled controls); `on_frame(stage)` is called after every recorded frame."""
+    empty and shuffled controls); `on_frame(stage)` is called after every recorded frame;
+    `timeout` limits each reset() and act() call to that many seconds."""
     began = time.perf_counter()
     error = None
     try:  # first: a served policy may declare what it uses in its answer
-        policy.reset()
+        with deadline(timeout):
+            policy.reset()
     except Exception as failure:  # e.g. its server is gone: the episode is scored as it stands
-        error = f"reset: the policy raised {type(failure).__name__}: {failure}"
+        error = f"reset: {_failure(failure)}"
     scene = compiled.spec.scenes[episode["scene"]]
     render = "images" in policy.uses or on_frame is not None
     sim = stage.simulation(scene, episode["layout"], render=render)
@@ -75,14 +85,13 @@ def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy,
     steps = queries = 0
     while error is None and steps < budget:
         queries += 1
+        seen = observation(policy, stage, text, steps, privileged)
         try:
-            chunk = validate_actions(policy.act(observation(policy, stage, text, steps,
-                                                            privileged)))
-        except BadActionError as bad:
-            error = f"step {steps}: {bad}"
-            break
+            with deadline(timeout):
+                answer = policy.act(seen)
+            chunk = validate_actions(answer)
         except Exception as failure:  # a policy bug ends its episode, not the evaluation
-            error = f"step {steps}: the policy raised {type(failure).__name__}: {failure}"
+            error = f"step {steps}: {_failure(failure)}"
             break
         for action in chunk[:min(CHUNK_LIMIT, budget - steps)]:
             sim.step(action)

@@ -16,10 +16,15 @@ class PolicyLoadError(RoboFollowError):
     """A --policy that names nothing usable."""
 
 
+def is_server(spec: str) -> bool:
+    """Whether a --policy names a policy server rather than an in-process policy."""
+    return spec.startswith(("ws://", "wss://", "tcp://"))
+
+
 def load_policy(spec: str) -> Policy:
     if spec in REFERENCE_POLICIES:
         return REFERENCE_POLICIES[spec]()
-    if spec.startswith(("ws://", "wss://", "tcp://")):
+    if is_server(spec):
         return _remote(spec)
     module_name, _, factory_name = spec.partition(":")
     if not module_name or not factory_name:

@@ -52,6 +52,7 @@ class EvalOptions:
     spec_digest: str
     tasks: tuple[str, ...] = ()  # task ids (scene/level/label) to keep; empty: every task
     sample: int | None = None  # keep this many tasks per scene and level, evenly spread
+    policy_timeout: float | None = None  # seconds an in-process policy call may take
 
     def to_json(self) -> dict:
         return dict(asdict(self), scenes=list(self.scenes), levels=list(self.levels),
@@ -117,7 +118,7 @@ class Evaluator:
         on_frame = ((lambda stage: frames.append(side_by_side(stage.cameras.images())))
                     if self.options.video != "none" else None)
         run = run_episode(self.compiled, self.stage, episode, self.policy, instruction,
-                          on_frame=on_frame)
+                          on_frame=on_frame, timeout=self.options.policy_timeout)
         record = dict(result_record(episode, instruction, run),
                       **references(self.compiled, episode, instruction))
         if frames and (self.options.video == "all" or not run.score.complete):
