@@ -8,9 +8,16 @@ import time
 import numpy as np
 import pytest
 
+from robofollow.compiler.world import World
+from robofollow.eval.chance import references
 from robofollow.eval.episode import ACTION_BUDGET, CHUNK_LIMIT, run_episode
 from robofollow.eval.policy import BadActionError, validate_actions
-from robofollow.eval.reference import REFERENCE_POLICIES, BlindPolicy, available_behaviours
+from robofollow.eval.reference import (
+    REFERENCE_POLICIES,
+    BlindPolicy,
+    available_behaviours,
+    understood,
+)
 from robofollow.sim import robot
 from tests.sim_helpers import benchmark, episode
 
@@ -61,6 +68,34 @@ def test_given_another_tasks_instruction_the_expert_performs_that_task(stage):
                       instruction=other["instruction"])
     assert run.score.intent_score == 0.0 and not run.score.complete
     assert run.score.executed_behaviour.match == "pickup_right_cube"
+
+
+@pytest.mark.parametrize("scene, instruction, arm", [
+    ("scene3", "Move the blue slab while avoiding passing over the red slab, then place it on "
+               "the green square label with the long side facing right.", "left"),  # training
+    ("scene2", "Put the red cube in the green bowl.", "right"),  # training places it right
+    ("scene1", "Pick up the red cylinder.", "right"),  # never picked in training: nearer arm
+    ("scene1", "Pick up the red ball.", "left"),
+    ("scene1", "Pick up the block to the right of the red ball.", "left"),  # both in training
+])
+def test_an_arm_the_instruction_does_not_name_is_chosen_as_training_does_else_the_nearer(
+        scene, instruction, arm):
+    compiled = benchmark()
+    world = World(compiled.spec.scenes[scene], "default")
+    behaviour = understood(instruction, world, compiled.spec.scenes[scene],
+                           compiled.candidates(scene))
+    assert [step.arm for step in behaviour.steps] == [arm]
+
+
+@pytest.mark.slow
+def test_the_expert_follows_an_instruction_that_names_no_arm(stage):
+    record = episode("scene3/L0/l_pick5_around2_to1_long_right#r1")
+    armless = ("Move the blue slab while avoiding passing over the red slab, then place it on "
+               "the green square label with the long side facing right.")
+    run = run_episode(benchmark(), stage, record, REFERENCE_POLICIES["expert"](),
+                      instruction=armless)
+    assert run.error is None and run.score.complete and run.score.intent_score == 1.0
+    assert references(benchmark(), record, armless)["followed_intent"] == 1.0
 
 
 @pytest.mark.slow

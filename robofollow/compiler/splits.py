@@ -82,6 +82,17 @@ def repertoire(scene: Scene, training: dict[str, Behaviour]) -> set[tuple]:
     return {signature(training[t.label], World(scene, t.layout)) for t in scene.tasks}
 
 
+def training_arm(behaviour: Behaviour, index: int, world: World,
+                 known: set[tuple]) -> str | None:
+    """The one arm the repertoire `known` performs step `index` of `behaviour` with (all but
+    the arm equal), or None when it has none or both."""
+    steps = behaviour.steps
+    rest = signature(Behaviour(steps=(steps[index],)), world)[0][1:]
+    arms = {entry[index][0] for entry in known
+            if len(entry) == len(steps) and entry[index][1:] == rest}
+    return arms.pop() if len(arms) == 1 else None
+
+
 def episode_seed(task_id: str, round_index: int, base: int) -> int:
     """The seed of a task's round: fixed by the task id, the round and the split's seed base."""
     offset = int(hashlib.sha256(task_id.encode()).hexdigest()[:8], 16) % 1000

@@ -6,19 +6,18 @@ chance            a language-blind guess: Intent and completion expected from pe
                   (what the blind policy does); among K behaviours that do not pass each
                   other's checks its completion is 1/K.
 followed_intent   the Intent earned by perfectly following the instruction the policy was
-                  given (1 for the episode's own; with --instruction-mode shuffled, the credit
-                  of the stages the other task shares; None when it does not ground).
+                  given as the expert understands it (1 for the episode's own; with
+                  --instruction-mode shuffled, the credit of the stages the other task shares;
+                  None when it does not ground).
 """
 
 from __future__ import annotations
 
 from robofollow.build import Compiled
 from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.grounding import ground
-from robofollow.compiler.parser import parse
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
-from robofollow.eval.reference import available_behaviours
+from robofollow.eval.reference import available_behaviours, understood
 from robofollow.oracle.chance import guessing, intent_if_performed
 
 
@@ -29,7 +28,7 @@ def references(compiled: Compiled, episode: dict, instruction: str) -> dict:
     training = compiled.candidates(scene.id)
     chance = guessing(asked, [training[label] for label in available_behaviours(world, training)])
     try:
-        followed = intent_if_performed(asked, ground(parse(instruction), world))
+        followed = intent_if_performed(asked, understood(instruction, world, scene, training))
     except RoboFollowError:
         followed = None
     return {"chance": chance, "followed_intent": followed}

@@ -18,6 +18,8 @@ from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import ground
 from robofollow.compiler.parser import parse
 from robofollow.compiler.plans import plan
+from robofollow.compiler.spec import Scene
+from robofollow.compiler.splits import repertoire, training_arm
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
 from robofollow.eval.policy import Privileged
@@ -60,13 +62,33 @@ def _hold() -> np.ndarray:
     return robot.home_state()[None]
 
 
+def understood(instruction: str, world: World, scene: Scene,
+               training: dict[str, Behaviour]) -> Behaviour:
+    """What following `instruction` on `world` means: its grounded behaviour, where an arm is
+    not named, the one arm the scene's training uses for that step, else the arm nearer the
+    object. Raises RoboFollowError when the instruction does not parse or ground."""
+    behaviour = ground(parse(instruction), world)
+    if all(step.arm for step in behaviour.steps):
+        return behaviour
+    known = repertoire(scene, training)
+    steps = tuple(step if step.arm else step.model_copy(update={
+        "arm": training_arm(behaviour, index, world, known) or _nearer_arm(world, step.source)})
+        for index, step in enumerate(behaviour.steps))
+    return behaviour.model_copy(update={"steps": steps})
+
+
+def _nearer_arm(world: World, body: str) -> str:
+    return min(robot.ARMS, key=lambda arm: abs(world.poses[body].x - robot.BASE_XY[arm][0]))
+
+
 class ExpertPolicy(_Scripted):
     uses = frozenset({"instruction", "privileged"})
 
     def script(self, observation: dict) -> np.ndarray:
         privileged = observation["privileged"]
         try:
-            behaviour = ground(parse(observation["instruction"]), privileged.world)
+            behaviour = understood(observation["instruction"], privileged.world,
+                                   privileged.scene, privileged.training)
         except RoboFollowError:  # not an instruction it understands here: it stays at home
             return _hold()
         return _perform(behaviour, privileged)

@@ -30,7 +30,7 @@ from robofollow.compiler.model import Model
 from robofollow.compiler.parser import parse
 from robofollow.compiler.spec import LEVELS, Spec
 from robofollow.compiler.spec_loader import spec_error
-from robofollow.compiler.splits import TestTask, repertoire, signature
+from robofollow.compiler.splits import TestTask, repertoire, signature, training_arm
 from robofollow.compiler.training import describe
 from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
 from robofollow.errors import InstructionError, RoboFollowError, SpecErrors
@@ -141,10 +141,7 @@ class TaskAuditor:
                 continue
             arm = wanted[index].get("arm") if index < len(wanted) else None
             if arm is None:
-                rest = signature(Behaviour(steps=(step,)), world)[0][1:]  # all but the arm
-                arms = {entry[index][0] for entry in self.repertoires[scene]
-                        if len(entry) == len(steps) and entry[index][1:] == rest}
-                arm = arms.pop() if len(arms) == 1 else None
+                arm = training_arm(behaviour, index, world, self.repertoires[scene])
             steps[index] = step.model_copy(update={"arm": arm})
         return behaviour.model_copy(update={"steps": tuple(steps)})
 
