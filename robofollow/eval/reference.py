@@ -1,8 +1,9 @@
 """Reference policies: the bounds a real policy is read against.
 
 expert  perfect understanding and execution: parses the instruction it is given, grounds it on
-        the current layout (privileged object poses) and executes the expert's plan. It uses no
-        episode metadata, so given another task's instruction it performs that one perfectly.
+        the current layout (privileged object poses) and executes the expert's plan (an arm the
+        instruction does not name: see `understood`). It uses no episode metadata, so given
+        another task's instruction it performs that one perfectly.
 blind   the language-blind control: ignores the instruction and performs, uniformly at random
         (seeded by the episode), one of the scene's training behaviours that the current
         layout allows; its Intent is the chance level.
