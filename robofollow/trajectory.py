@@ -101,3 +101,14 @@ def yaw(quaternion: np.ndarray) -> np.ndarray:
     x axis projected on the table."""
     w, x, y, z = np.moveaxis(np.asarray(quaternion), -1, 0)
     return np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+
+
+def tilt(before: np.ndarray, after: np.ndarray) -> np.ndarray:
+    """Angle (rad) between a body's up axis at two orientations, quaternions (..., 4)
+    (w, x, y, z): how far it tipped over, whatever it turned about the vertical."""
+    def up(quaternion: np.ndarray) -> np.ndarray:
+        w, x, y, z = np.moveaxis(np.asarray(quaternion, dtype=float), -1, 0)
+        return np.stack([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)], -1)
+
+    cosine = np.sum(up(before) * up(after), axis=-1)
+    return np.arccos(np.clip(cosine, -1.0, 1.0))

@@ -25,16 +25,19 @@ from tests.sim_helpers import benchmark, episode
 
 def test_valid_chunks_pass_and_a_single_action_is_a_chunk_of_one():
     home = robot.home_state()
-    assert validate_actions(home).shape == (1, 14)
+    chunk, past = validate_actions(home)
+    assert chunk.shape == (1, 14) and past.tolist() == [False]
     nudged = home.copy()
-    nudged[6] = 1.0005  # within the slack: clipped to the limit
-    assert validate_actions([home, nudged])[1, 6] == 1.0
+    nudged[6] = 1.02  # a learned policy's "open", past the limit: clipped, not an error
+    chunk, past = validate_actions([home, nudged])
+    assert chunk[1, 6] == 1.0 and past.tolist() == [False, True]
 
 
 @pytest.mark.parametrize("actions, message", [
     (np.zeros((3, 7)), r"\[T, 14\] with T >= 1, got shape \[3, 7\]"),
     (np.zeros((0, 14)), r"got shape \[0, 14\]"),
     ([[np.nan] * 14], "action 0 has a non-finite value at left_joint_0"),
+    ([[np.inf] * 14], "action 0 has a non-finite value at left_joint_0"),
     ("go", "actions are not numbers"),
 ])
 def test_invalid_chunks_say_what_is_wrong(actions, message):
@@ -42,11 +45,11 @@ def test_invalid_chunks_say_what_is_wrong(actions, message):
         validate_actions(actions)
 
 
-def test_a_joint_past_its_limit_is_named():
+def test_a_joint_far_past_its_limit_is_clipped_to_it():
     action = robot.home_state()
     action[8] = 2.5  # right_joint_1, limit 1.2566
-    with pytest.raises(BadActionError, match=r"action 0: right_joint_1 = 2.5000 is outside"):
-        validate_actions(action)
+    chunk, past = validate_actions(action)
+    assert chunk[0, 8] == robot.ACTION_HIGH[8] and past.tolist() == [True]
 
 
 @pytest.mark.slow

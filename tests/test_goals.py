@@ -37,8 +37,8 @@ def test_every_training_graph_is_a_gated_chain_whose_weights_sum_to_one(behaviou
     ("push_left_cube_to_red_cylinder", ["push_contact", "push", "finish"], [0.4, 0.4, 0.2]),
     ("place_right_cube_in_green_bowl", ["source_grounding", "place_in_bowl", "finish"],
      [0.4, 0.4, 0.2]),
-    ("r_pick2_via4_to6_short_front", ["source_grounding", "route", "orientation"],
-     [0.3, 0.3, 0.4]),
+    ("r_pick2_via4_to6_short_front", ["source_grounding", "route", "orientation", "finish"],
+     [0.24, 0.24, 0.32, 0.2]),
     ("s41_seq_l_bowl_then_r_green_cylinder", ["source_grounding", "source_grounding", "finish"],
      [0.4, 0.4, 0.2]),
 ])
@@ -59,10 +59,21 @@ def test_sequences_chain_a_then_b(behaviours):
 def test_nodes_carry_predicates_with_parameters(behaviours):
     graph = goal_graph(behaviours["r_pick2_via4_to6_short_front"])
     route = graph.nodes["route"]["execution"]
-    assert route["predicate"] == "carried_over"
+    assert route["predicate"] == "route_footprints"
     assert route["params"]["waypoints"] == [["via", "yellow_slab"]]
     assert graph.nodes["outcome"]["execution"]["params"]["yaw_deg"] == 0.0
+    assert graph.nodes["finish"]["intent"]["params"]["keep"] == [["red_slab", "placed", "right"]]
     assert graph.graph["profile"]["name"] == "default"
+
+
+def test_the_finish_knows_how_each_handled_object_ends(behaviours):
+    keep = {label: goal_graph(behaviours[label]).nodes["finish"]["intent"]["params"]["keep"]
+            for label in ("pickup_left_cube", "push_left_cube_to_red_cylinder",
+                          "s41_seq_r_green_cylinder_then_l_bowl")}
+    assert keep["pickup_left_cube"] == [["large_blue_cube", "held", "left"]]
+    assert keep["push_left_cube_to_red_cylinder"] == [["large_blue_cube", "pushed", "left"]]
+    assert keep["s41_seq_r_green_cylinder_then_l_bowl"] == [["green_cylinder", "held", "right"],
+                                                            ["red_cube", "held", "left"]]
 
 
 def test_a_branch_that_asks_for_nothing_is_scored_on_staying_still():

@@ -12,7 +12,7 @@ from robofollow.eval.chance import references
 from robofollow.eval.episode import run_episode
 from robofollow.eval.instructions import given_instruction
 from robofollow.eval.reference import REFERENCE_POLICIES
-from robofollow.oracle.chance import guessing, intent_if_performed
+from robofollow.oracle.chance import completes_if_performed, guessing, intent_if_performed
 from tests.sim_helpers import benchmark, episode
 
 TRAINING = benchmark().training
@@ -34,9 +34,10 @@ def test_another_object_earns_nothing_and_another_target_the_source_stage_only()
     assert _intent(stack, "push_left_cube_to_red_cylinder") == 0.0  # a push grasps nothing
 
 
-def test_doing_more_than_asked_still_finishes_but_doing_less_stops_at_the_missing_stage():
+def test_doing_more_than_asked_loses_the_finish_and_doing_less_stops_at_the_missing_stage():
     pick, unstack = "s41_r_pick_green_cylinder_top", "s42_r_unstack_green_cylinder_to_slot6"
-    assert _intent(pick, unstack) == 1.0  # an unstack picks the cylinder up first
+    assert _intent(pick, unstack) == pytest.approx(0.8)  # picked up, then set down: not kept
+    assert completes_if_performed(TRAINING[pick], TRAINING[unstack])  # a pickup at IS 0.8
     assert _intent(unstack, pick) == pytest.approx(0.4)  # the placement never happens
     sequence = "s41_seq_r_green_cylinder_then_l_bowl"
     assert _intent(sequence, pick) == pytest.approx(0.4)  # the second step never starts
@@ -51,9 +52,10 @@ def test_a_blind_guess_completes_with_probability_one_in_k_for_distinct_behaviou
 
 @settings(max_examples=200, deadline=None)
 @given(st.sampled_from(LABELS), st.lists(st.sampled_from(LABELS), min_size=1, max_size=8))
-def test_guessing_is_bounded_and_completion_never_exceeds_intent(asked, performed):
+def test_guessing_is_bounded_and_only_guesses_with_intent_complete(asked, performed):
     chance = guessing(TRAINING[asked], [TRAINING[label] for label in performed])
-    assert 0.0 <= chance["CR"] <= chance["IS"] <= 1.0
+    some_intent = sum(_intent(asked, label) > 0 for label in performed) / len(performed)
+    assert 0.0 <= chance["CR"] <= round(some_intent, 6) and 0.0 <= chance["IS"] <= 1.0
     if asked in performed:
         assert chance["CR"] >= round(performed.count(asked) / len(performed), 6)
 
@@ -62,7 +64,9 @@ def test_episode_references_name_the_chance_and_the_followed_instruction():
     record = episode("scene2/L0/pickup_left_cube#r1")
     own = references(benchmark(), record, record["instruction"])
     assert own["followed_intent"] == 1.0
-    assert 0.0 < own["chance"]["CR"] <= own["chance"]["IS"] < 0.5
+    # 16 guesses: the pickup itself (1.0) and two stacks of the same cube (0.8 each: picked
+    # up, then set down) complete it under the paper's rule for pickups; the rest earn nothing
+    assert own["chance"] == {"IS": pytest.approx(2.6 / 16), "CR": pytest.approx(3 / 16)}
     assert references(benchmark(), record, "")["followed_intent"] is None
     other = episode("scene2/L0/pickup_right_cube#r1")["instruction"]
     assert references(benchmark(), record, other)["followed_intent"] == 0.0

@@ -12,44 +12,41 @@ from hypothesis import strategies as st
 from robofollow.oracle import predicates as P
 
 
-def test_gripper_events_are_transitions_with_frame_zero_counting_when_closed():
+def test_falls_are_transitions_with_frame_zero_counting_when_closed():
     signal = np.array([1.0, 0.9, 0.3, 0.2, 0.8, 0.1, 0.1, 1.0])
     assert P.falls(signal, 0.35).tolist() == [2, 5]
-    assert P.rises(signal, 0.7).tolist() == [4, 7]
     assert P.falls(np.array([0.2, 0.2, 1.0, 0.3]), 0.35).tolist() == [0, 3]
-    assert P.rises(np.array([1.0, 1.0]), 0.7).tolist() == []  # open from the start: no event
-    assert P.first(np.array([2, 5, 9]), 3) == 5 and P.first(np.array([2]), 3) is None
+    assert P.first_true(np.array([0, 1, 0, 1], dtype=bool), 2) == 3
+    assert P.first_true(np.array([0, 1, 0], dtype=bool), 2) is None
 
 
-def test_first_stay_needs_a_full_run_or_a_run_to_the_end():
+def test_holds_for_needs_a_full_run_or_a_run_to_the_end():
     mask = np.array([0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1], dtype=bool)
-    assert P.first_stay(mask, 0, 3) == 4
-    assert P.first_stay(mask, 0, 5) == 9  # only the run to the end is long enough
-    assert P.first_stay(mask, 5, 2) == 5
-    assert P.first_stay(np.zeros(5, dtype=bool), 0, 2) is None
+    assert P.first_true(P.holds_for(mask, 3)) == 4
+    assert P.first_true(P.holds_for(mask, 5)) == 9  # only the run to the end is long enough
+    assert P.first_true(P.holds_for(mask, 2), 5) == 5
+    assert not P.holds_for(np.zeros(5, dtype=bool), 2).any()
 
 
-@given(st.lists(st.booleans(), min_size=1, max_size=40), st.integers(1, 10), st.integers(0, 39))
-def test_first_stay_matches_its_definition(values, frames, after):
+@given(st.lists(st.booleans(), min_size=1, max_size=40), st.integers(1, 10))
+def test_holds_for_matches_its_definition(values, frames):
     mask = np.array(values)
-    after = min(after, len(mask) - 1)
-    expected = next((t for t in range(after, len(mask))
-                     if mask[t:t + min(frames, len(mask) - t)].all()), None)
-    assert P.first_stay(mask, after, frames) == expected
+    expected = [bool(mask[t:t + frames].all()) for t in range(len(mask))]
+    assert P.holds_for(mask, frames).tolist() == expected
 
 
-def test_relations_in_a_cone_and_within_reach():
-    offsets = np.array([[-0.08, 0.0], [-0.08, 0.07], [-0.06, 0.09], [-0.13, 0.0], [0.0, 0.0]])
-    assert P.in_cone(offsets, (-1.0, 0.0), 0.12, 45.0).tolist() == [True, True, False, False, False]
-    assert P.in_cone(offsets, None, 0.12, 45.0).tolist() == [True, True, True, False, False]
+@given(st.lists(st.floats(-0.1, 0.1), min_size=1, max_size=30), st.integers(1, 6),
+       st.floats(0.0, 0.05))
+def test_steady_matches_its_definition(values, frames, radius):
+    points = np.array(values)[:, None]
+    expected = [bool(np.abs(points[t:t + frames] - points[t]).max() <= radius)
+                for t in range(len(points))]
+    assert P.steady(points, frames, radius).tolist() == expected
 
 
-def test_stacking_and_bowls():
-    target = np.array([[0.0, 0.0, 0.765]] * 3)
-    source = np.array([[0.01, 0.0, 0.81], [0.05, 0.0, 0.81], [0.0, 0.0, 0.78]])
-    assert P.stacked(source, target, 0.045, 0.03, 0.005).tolist() == [True, False, False]
-    bowl = np.array([[0.0, 0.0, 0.76]] * 3)
-    assert P.in_bowl(source, bowl, 0.04, 0.06).tolist() == [True, False, True]
+def test_directions_in_a_cone():
+    offsets = np.array([[-0.08, 0.0], [-0.08, 0.07], [-0.06, 0.09], [-0.30, 0.0], [0.0, 0.0]])
+    assert P.in_cone(offsets, (-1.0, 0.0), 45.0).tolist() == [True, True, False, True, False]
 
 
 def test_push_progress_counts_only_inside_the_cone():
@@ -66,15 +63,26 @@ def test_crossings_find_a_line_jumped_between_frames():
     assert frames.tolist() == [2, 3]
 
 
-def test_footprints_boxes_and_distances():
+def test_footprints_turn_with_the_body_and_overlap_by_their_extents():
+    half = np.array([0.018, 0.028, 0.013])
+    turned = P.footprint(half, np.array([0.0, math.pi / 2, math.pi / 4]), round_=False)
+    np.testing.assert_allclose(turned[0], [0.018, 0.028])
+    np.testing.assert_allclose(turned[1], [0.028, 0.018], atol=1e-12)
+    np.testing.assert_allclose(turned[2], [0.046 / math.sqrt(2)] * 2)
+    np.testing.assert_allclose(P.footprint(half, np.array([1.0]), round_=True), [[0.018, 0.028]])
     path = np.array([[0.0, 0.0], [0.02, 0.0], [0.0, 0.03]])
     centre = np.zeros((3, 2))
-    assert P.over_footprint(path, centre, (0.018, 0.028)).tolist() == [True, False, False]
+    assert P.over_footprint(path, centre, np.array([0.018, 0.028])).tolist() == [True, False,
+                                                                                 False]
+    near = np.array([[0.035, 0.0], [0.037, 0.0]])
+    assert P.overlaps(near, np.array([0.018, 0.028]), np.zeros((2, 2)),
+                      np.array([0.018, 0.028])).tolist() == [True, False]
+
+
+def test_inside_box():
     points = np.array([[0.0, 0.0, 0.8], [0.3, 0.0, 0.8]])
-    assert P.inside_box(points, ((-0.2, 0.15), (-0.15, 0.15), (0.74, 1.0))).tolist() == [True, False]
-    assert P.within(points, np.array([0.0, 0.0, 0.85]), 0.10).tolist() == [True, False]
-    assert P.nearest(np.array([[0.0, 0.0], [0.1, 0.0], [0.05, 0.0]]), np.array([0.09, 0.0]),
-                     np.array([0, 2])) == (2, pytest.approx(0.04))
+    assert P.inside_box(points, ((-0.2, 0.15), (-0.15, 0.15), (0.74, 1.0))).tolist() == [True,
+                                                                                         False]
 
 
 @pytest.mark.parametrize("angle, target, error", [

@@ -2,13 +2,16 @@
 
 Stages follow the paper: source grounding (grasp or push contact), the action objective
 (relative placement, stack, bowl, push, route), the outcome (placement and orientation), and a
-finishing stage (back home, still, the other arm out of the work area). Each node carries its
+finishing stage for every task (back home and still, the handled objects left as put, nothing
+else disturbed, the other arm out of the work area). Each node carries its
 weight and the intent and execution predicates, by name, with their parameters; an edge
 a -> b means b is scored only when a is fully achieved. A sequence chains its steps.
 """
 
 from __future__ import annotations
 
+import json
+from functools import lru_cache
 from itertools import pairwise
 
 import networkx as nx
@@ -34,59 +37,77 @@ class _Builder:
 
     def grasp(self, prefix: str, step: Step, weight: float, lift: float) -> None:
         self.add(f"{prefix}source", "source_grounding", weight, step.arm,
-                 _predicate("nearest_at_first_close", arm=step.arm, object=step.source,
-                            radius=self.p.grasp_radius, close=self.p.close_threshold),
-                 _predicate("lifted", object=step.source, min_lift=lift))
+                 _predicate("went_for", arm=step.arm, object=step.source,
+                            reach=self.p.reach_radius),
+                 _predicate("held_and_lifted", object=step.source, min_lift=lift))
+
+    def push_contact(self, prefix: str, step: Step, weight: float) -> None:
+        p = self.p
+        self.add(f"{prefix}source", "push_contact", weight, step.arm,
+                 _predicate("first_pushed", arm=step.arm, object=step.source),
+                 _predicate("pushed_closed_low", object=step.source,
+                            close=p.push_close_threshold, height=p.push_height_tolerance))
 
     def objective(self, prefix: str, step: Step, weight: float) -> None:
         p = self.p
         if step.action == "push":
+            towards = dict(object=step.source, target=step.target, cone_deg=p.push_cone_deg)
             self.add(f"{prefix}objective", "push", weight, step.arm,
-                     _predicate("pushed_towards", object=step.source, target=step.target,
-                                min_displacement=p.push_min_intent, cone_deg=p.push_cone_deg),
-                     _predicate("pushed_towards", object=step.source, target=step.target,
-                                min_displacement=p.push_min_execution, cone_deg=p.push_cone_deg))
+                     _predicate("pushed_towards", min_displacement=p.push_min_intent, **towards),
+                     _predicate("pushed_towards_at_rest", min_displacement=p.push_min_execution,
+                                **towards))
         elif step.relation == "on":
             self.add(f"{prefix}objective", "stack", weight, step.arm,
-                     _predicate("held_above", object=step.source, target=step.target,
-                                radius=p.grasp_radius, clearance=p.stack_clearance),
-                     _predicate("stacked_on", object=step.source, target=step.target,
-                                xy=p.stack_xy, clearance=p.stack_clearance))
+                     _predicate("delivered_onto", object=step.source, target=step.target,
+                                radius=p.aim_radius),
+                     _predicate("rests_on", object=step.source, target=step.target,
+                                xy=p.stack_xy, clearance=p.stack_clearance,
+                                rest=p.rest_tolerance))
         elif step.relation == "in":
             self.add(f"{prefix}objective", "place_in_bowl", weight, step.arm,
-                     _predicate("lowered_into", object=step.source, bowl=step.target,
-                                xy=p.bowl_xy, height=p.bowl_height),
-                     _predicate("released_in", object=step.source, bowl=step.target,
-                                xy=p.bowl_xy, height=p.bowl_height))
+                     _predicate("delivered_into", object=step.source, bowl=step.target,
+                                radius=p.aim_radius),
+                     _predicate("rests_in", object=step.source, bowl=step.target, xy=p.bowl_xy,
+                                height=p.bowl_height))
         else:
-            params = dict(object=step.source, relation=step.relation, landmark=step.target,
-                          range=p.relation_range, cone_deg=p.relation_cone_deg,
-                          on_table=p.on_table_tolerance)
             self.add(f"{prefix}objective", "relative_placement", weight, step.arm,
-                     _predicate("set_down_in_relation", **params),
-                     _predicate("released_in_relation", **params))
+                     _predicate("delivered_towards", object=step.source,
+                                relation=step.relation, landmark=step.target,
+                                cone_deg=p.relation_cone_deg),
+                     _predicate("rests_in_relation", object=step.source,
+                                relation=step.relation, landmark=step.target,
+                                range=p.relation_range, cone_deg=p.relation_cone_deg,
+                                rest=p.rest_tolerance))
 
-    def transfer(self, step: Step, weights: tuple[float, float, float]) -> None:
+    def transfer(self, step: Step, weights: tuple[float, float, float, float]) -> None:
         p = self.p
         self.grasp("", step, weights[0], p.min_lift)
         route = [list(w) for w in step.waypoints]
         self.add("route", "route", weights[1], step.arm,
-                 _predicate("carried_over", object=step.source, waypoints=route, x=p.route_x,
-                            y=p.route_y, clear_y=p.route_clear_y),
-                 _predicate("carried_over", object=step.source, waypoints=route, x=p.route_x,
-                            y=p.route_y, clear_y=p.route_clear_y))
-        placement = dict(object=step.source, relation=step.relation, target=step.target,
-                         edge=p.label_edge, yaw_deg=step.yaw_degrees)
+                 _predicate("route_sides", object=step.source, waypoints=route, x=p.route_x,
+                            y=p.route_y),
+                 _predicate("route_footprints", object=step.source, waypoints=route))
+        yaw = dict(object=step.source, target=step.target, yaw_deg=step.yaw_degrees)
         self.add("outcome", "orientation", weights[2], step.arm,
-                 _predicate("final_placement", tolerance_deg=p.yaw_intent_deg, **placement),
-                 _predicate("final_placement", tolerance_deg=p.yaw_execution_deg, **placement))
+                 _predicate("delivered_to_label", radius=p.aim_radius,
+                            tolerance_deg=p.yaw_intent_deg, **yaw),
+                 _predicate("rests_on_label", rest=p.rest_tolerance,
+                            tolerance_deg=p.yaw_execution_deg, **yaw))
+        self.finish(weights[3], [step])
 
-    def finish(self, weight: float, arms: list[str | None]) -> None:
+    def finish(self, weight: float, steps: list[Step]) -> None:
+        """Back home and still; each handled object held (pickups) or left where it came to
+        rest; nothing else disturbed (a push's target may be struck); the idle arm out of the
+        work area."""
         p = self.p
-        params = dict(arms=arms, home_radius=p.home_radius, frames=p.home_frames,
-                      deadline_frames=p.home_deadline_frames, leave_radius=p.leave_home_radius,
-                      operation_area=[list(a) for a in p.operation_area],
-                      close=p.close_threshold)
+        keep = [[step.source, _KEEP[step.action], step.arm] for step in steps]
+        struck = [step.target for step in steps if step.action == "push"]  # may be hit
+        params = dict(arms=[step.arm for step in steps], keep=keep, struck=struck,
+                      home_radius=p.home_radius, frames=p.home_frames,
+                      still_radius=p.still_radius, deadline_frames=p.home_deadline_frames,
+                      leave_radius=p.leave_home_radius, stay=p.stay_tolerance,
+                      disturb=p.disturb_tolerance, topple_deg=p.topple_deg,
+                      operation_area=[list(a) for a in p.operation_area])
         self.add("finish", "finish", weight, None, _predicate("finished", **params),
                  _predicate("finished", **params))
 
@@ -94,33 +115,35 @@ class _Builder:
         p = self.p
         if step.action == "pick":
             self.grasp("", step, p.pick_weights[0], p.pickup_lift)
-            self.finish(p.pick_weights[1], [step.arm])
+            self.finish(p.pick_weights[1], [step])
         elif step.action == "place" and (step.waypoints or step.yaw_degrees is not None):
             self.transfer(step, p.transfer_weights)
         else:
             source, objective, finish = p.action_weights
             if step.action == "push":
-                self.add("source", "push_contact", source, step.arm,
-                         _predicate("push_contact", arm=step.arm, object=step.source,
-                                    radius=p.grasp_radius, close=p.push_close_threshold),
-                         _predicate("push_contact_low", arm=step.arm, object=step.source,
-                                    radius=p.push_contact_radius,
-                                    height=p.push_height_tolerance))
+                self.push_contact("", step, source)
             else:
                 self.grasp("", step, source, p.min_lift)
             self.objective("", step, objective)
-            self.finish(finish, [step.arm])
+            self.finish(finish, [step])
 
     def sequence(self, steps: tuple[Step, ...]) -> None:
         shared, finish = self.p.sequence_weights
         for index, step in enumerate(steps, start=1):
             weight = shared / len(steps)
+            prefix = f"step{index}."
             if step.action == "pick":
-                self.grasp(f"step{index}.", step, weight, self.p.min_lift)
+                self.grasp(prefix, step, weight, self.p.min_lift)
+                continue
+            if step.action == "push":
+                self.push_contact(prefix, step, weight / 2)
             else:
-                self.grasp(f"step{index}.", step, weight / 2, self.p.min_lift)
-                self.objective(f"step{index}.", step, weight / 2)
-        self.finish(finish, [step.arm for step in steps])
+                self.grasp(prefix, step, weight / 2, self.p.min_lift)
+            self.objective(prefix, step, weight / 2)
+        self.finish(finish, list(steps))
+
+
+_KEEP = {"pick": "held", "place": "placed", "push": "pushed"}  # how a handled object ends
 
 
 def goal_graph(behaviour: Behaviour, profile: ScoringProfile = DEFAULT_PROFILE) -> nx.DiGraph:
@@ -150,3 +173,13 @@ def graph_to_dict(graph: nx.DiGraph) -> dict:
     return {"profile": graph.graph["profile"]["name"], "branch": graph.graph["branch"],
             "nodes": [{"id": n, **graph.nodes[n]} for n in stage_order(graph)],
             "edges": [[a, b] for a, b in graph.edges]}
+
+
+@lru_cache(maxsize=4096)
+def scoring_nodes(behaviour: Behaviour,
+                  profile: ScoringProfile) -> tuple[tuple[str, dict, str], ...]:
+    """The goal DAG's nodes in scoring order, each with a key naming what it checks (equal
+    keys in different behaviours evaluate alike, so a recording evaluates them once)."""
+    graph = goal_graph(behaviour, profile)
+    return tuple((n, graph.nodes[n], json.dumps([graph.nodes[n][k] for k in (
+        "name", "arm", "intent", "execution")], sort_keys=True)) for n in stage_order(graph))

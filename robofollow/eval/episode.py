@@ -1,8 +1,8 @@
 """One evaluation episode, as upstream's protocol: reset the episode's layout with its seed,
 then query the policy for action chunks and execute them (at most CHUNK_LIMIT actions of each)
 until the fixed action budget is spent; nothing ends an episode early except a policy failure
-(an exception, invalid actions or, with a time limit, a call that runs past it), which is
-recorded. The recording is scored by the oracle."""
+(an exception, a chunk that is not [T, 14] finite numbers or, with a time limit, a call that
+runs past it), which is recorded. Targets past a joint limit are clipped to it and counted. The recording is scored by the oracle."""
 
 from __future__ import annotations
 
@@ -31,6 +31,7 @@ class EpisodeRun:
     trajectory: Trajectory
     steps: int  # control steps executed
     queries: int  # policy calls
+    clipped: int  # executed actions with a target past a joint limit (clipped to it)
     error: str | None  # why the policy stopped early, if it did
     seconds: float
 
@@ -82,21 +83,24 @@ def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy,
     privileged = (Privileged(sim, world, scene, compiled.candidates(scene.id), episode["seed"])
                   if "privileged" in policy.uses else None)
     text = episode["instruction"] if instruction is None else instruction
-    steps = queries = 0
+    steps = queries = clipped = 0
     while error is None and steps < budget:
         queries += 1
         seen = observation(policy, stage, text, steps, privileged)
         try:
             with deadline(timeout):
                 answer = policy.act(seen)
-            chunk = validate_actions(answer)
+            chunk, past = validate_actions(answer)
         except Exception as failure:  # a policy bug ends its episode, not the evaluation
             error = f"step {steps}: {_failure(failure)}"
             break
-        for action in chunk[:min(CHUNK_LIMIT, budget - steps)]:
+        executed = min(CHUNK_LIMIT, budget - steps, len(chunk))
+        clipped += int(past[:executed].sum())
+        for action in chunk[:executed]:
             sim.step(action)
             record(action)
             steps += 1
     trajectory = recorder.trajectory()
     result = score_recording(compiled, episode, trajectory)
-    return EpisodeRun(result, trajectory, steps, queries, error, time.perf_counter() - began)
+    return EpisodeRun(result, trajectory, steps, queries, clipped, error,
+                      time.perf_counter() - began)

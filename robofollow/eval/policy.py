@@ -29,7 +29,6 @@ from robofollow.sim.simulation import Simulation
 
 OBSERVATION_PARTS = frozenset({"state", "instruction", "images", "privileged"})
 ACTION_WIDTH = len(robot.JOINT_NAMES)
-JOINT_SLACK = 1e-3  # rad: targets this far past a joint limit are still accepted (clipped)
 
 
 @runtime_checkable
@@ -56,12 +55,13 @@ class PolicyConnectionError(RoboFollowError):
 
 
 class BadActionError(RoboFollowError):
-    """A policy returned something that is not a chunk of valid joint targets."""
+    """A policy returned something that is not a chunk of finite joint targets."""
 
 
-def validate_actions(actions) -> np.ndarray:
-    """The chunk as float64 [T, 14] targets within the joint limits, or BadActionError saying
-    what is wrong (shape, non-finite values, a joint past its limit)."""
+def validate_actions(actions) -> tuple[np.ndarray, np.ndarray]:
+    """The chunk as float64 [T, 14] targets clipped to the joint limits, with which actions
+    had a target past a limit (learned policies overshoot limits their demonstrations touch);
+    BadActionError says what is wrong with a chunk that is not [T, 14] finite numbers."""
     try:
         chunk = np.asarray(actions, dtype=np.float64)
     except (TypeError, ValueError) as error:
@@ -75,11 +75,4 @@ def validate_actions(actions) -> np.ndarray:
         row, column = np.argwhere(~np.isfinite(chunk))[0]
         raise BadActionError(f"action {row} has a non-finite value at "
                              f"{robot.JOINT_NAMES[column]}")
-    low, high = robot.ACTION_LOW - JOINT_SLACK, robot.ACTION_HIGH + JOINT_SLACK
-    outside = np.argwhere((chunk < low) | (chunk > high))
-    if len(outside):
-        row, column = outside[0]
-        raise BadActionError(
-            f"action {row}: {robot.JOINT_NAMES[column]} = {chunk[row, column]:.4f} is outside "
-            f"its limits [{robot.ACTION_LOW[column]:.4f}, {robot.ACTION_HIGH[column]:.4f}]")
-    return np.clip(chunk, robot.ACTION_LOW, robot.ACTION_HIGH)
+    return robot.clip_to_limits(chunk)

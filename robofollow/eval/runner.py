@@ -98,7 +98,7 @@ def result_record(episode: dict, instruction: str, run: EpisodeRun) -> dict:
         "stages": [s.model_dump(mode="json") for s in score.stages],
         "executed_behaviour": (score.executed_behaviour.model_dump(mode="json")
                                if score.executed_behaviour else None),
-        "steps": run.steps, "queries": run.queries, "error": run.error,
+        "steps": run.steps, "queries": run.queries, "clipped": run.clipped, "error": run.error,
         "seconds": round(run.seconds, 3),
         "hashes": {"episode": episode["hash"], "instruction": _digest(instruction.encode()),
                    "initial_state": _digest(start)}}

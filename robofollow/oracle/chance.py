@@ -2,11 +2,12 @@
 behaviour earns when another one was asked for. The asked behaviour's stages are compared in
 scoring order with the performed one's by their Intent checks (what, which arm, which object
 and relation); Intent is credited while they agree and, as the scorer gates it, not from the
-first that differs. Doing more than asked (an unstack is a pick-up first) still earns the
-finishing stage. A behaviour that passes every Intent check of the asked one counts as
-completing it. A language-blind policy choosing among K equally likely behaviours, none of
-which passes another's checks, completes the asked one with probability 1/K: the chance level
-scene entropy H(T|S) implies."""
+first that differs. The finishing stage is credited only when the two finish alike (the same
+arms, the same objects kept the same way): doing more than asked is an action the instruction
+did not ask for. Completion follows the scorer's rule: a pickup by its scores (Intent at least
+`pickup_complete`), any other action when every working check passes. A language-blind policy
+choosing among K equally likely behaviours, none of which passes another's checks, completes
+the asked one with probability 1/K: the chance level scene entropy H(T|S) implies."""
 
 from __future__ import annotations
 
@@ -16,8 +17,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.goals import scoring_nodes
 from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
-from robofollow.oracle.score import scoring_nodes
 
 
 def intent_if_performed(asked: Behaviour, performed: Behaviour,
@@ -33,6 +34,25 @@ def intent_if_performed(asked: Behaviour, performed: Behaviour,
     if asked_finish is not None and asked_finish[1] == (performed_finish or (0, None))[1]:
         earned += asked_finish[0]
     return round(earned, 6)
+
+
+def passes_work(asked: Behaviour, performed: Behaviour,
+                profile: ScoringProfile = DEFAULT_PROFILE) -> bool:
+    """Whether performing `performed` passes every working (not finishing) Intent check of
+    `asked`, in order."""
+    asked_work, _ = _intent_checks(asked, profile)
+    performed_work, _ = _intent_checks(performed, profile)
+    return [c for _, c in performed_work[:len(asked_work)]] == [c for _, c in asked_work]
+
+
+def completes_if_performed(asked: Behaviour, performed: Behaviour,
+                           profile: ScoringProfile = DEFAULT_PROFILE) -> bool:
+    """Whether performing `performed` perfectly completes `asked`."""
+    if asked.steps and all(step.action == "pick" for step in asked.steps):
+        return intent_if_performed(asked, performed, profile) >= profile.pickup_complete - 1e-6
+    if not asked.steps:
+        return intent_if_performed(asked, performed, profile) >= 1.0 - 1e-6
+    return passes_work(asked, performed, profile)
 
 
 def _intent_checks(behaviour: Behaviour, profile: ScoringProfile) -> tuple[list, tuple | None]:
@@ -54,6 +74,6 @@ def guessing(asked: Behaviour, choices: Sequence[Behaviour],
     uniformly at random, perfectly."""
     if not choices:
         return {"IS": 0.0, "CR": 0.0}
-    earned = np.array([intent_if_performed(asked, c, profile) for c in choices])
-    return {"IS": round(float(earned.mean()), 6),
-            "CR": round(float((earned >= 1.0 - 1e-6).mean()), 6)}
+    earned = [intent_if_performed(asked, c, profile) for c in choices]
+    done = [completes_if_performed(asked, c, profile) for c in choices]
+    return {"IS": round(float(np.mean(earned)), 6), "CR": round(float(np.mean(done)), 6)}

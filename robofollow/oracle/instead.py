@@ -1,5 +1,7 @@
-"""What the arms actually did, in words: objects grasped, lifted, carried over, set down or
-pushed, read from the trajectory alone (the scorer matches it to known behaviours)."""
+"""What physically happened, in words: per arm, what it went for (grasped, closed its
+fingers at, pushed), how far it lifted and carried what it held and where it let go; then
+where every moved object ended (on, in or beside a body, held, off the table, knocked over).
+Read from the same events the stages are judged on, so it never contradicts them."""
 
 from __future__ import annotations
 
@@ -7,7 +9,7 @@ import numpy as np
 
 from robofollow.compiler.world import DIRECTIONS
 from robofollow.oracle import predicates as P
-from robofollow.oracle.recording import Recording
+from robofollow.oracle.recording import Attempt, Recording
 from robofollow.trajectory import ARMS
 
 SIDES = {"left_of": "left of", "right_of": "right of", "behind": "behind",
@@ -17,51 +19,72 @@ HEADINGS = {"left_of": "to the left", "right_of": "to the right", "behind": "awa
 
 
 def describe_actions(rec: Recording) -> str:
-    """One clause per grasped object and per pushed object, or 'nothing moved'."""
-    clauses, handled = [], set()
-    for arm, name in enumerate(ARMS):
-        firsts = {}
-        for grasp in rec.grasps(arm):
-            firsts.setdefault(grasp.body, grasp.frame)
-        for body, frame in firsts.items():
-            handled.add(body)
-            clauses.append(f"the {name} arm {_handled(rec, body, frame)}")
-    p = rec.profile
-    for body in rec.graspable:
-        if body in handled:
-            continue
-        shift = rec.xy[-1, body] - rec.xy[0, body]
-        if np.linalg.norm(shift) >= p.push_min_execution and \
-                np.abs(rec.rise(body, 0)).max() <= p.on_table_tolerance:
-            clauses.append(f"{rec.bodies[body]} was pushed {np.linalg.norm(shift) * 100:.1f} cm "
-                           f"{HEADINGS[_side(shift)]}")
+    """One clause per thing an arm went for, then one per object that ended elsewhere than
+    it started (but those still held, said already); 'nothing moved' when neither."""
+    clauses = [f"the {ARMS[a.arm]} arm {_did(rec, a)}"
+               for a in sorted(rec.attempts(0) + rec.attempts(1), key=lambda a: a.frame)]
+    held = {rec.holding(arm)[-1] for arm in range(2)}
+    clauses += [_ended(rec, body) for body in rec.movable
+                if body not in held and _moved(rec, body)]
     return "; ".join(clauses) or "nothing moved"
 
 
-def _handled(rec: Recording, body: int, grasp: int) -> str:
-    name, p = rec.bodies[body], rec.profile
-    rise = rec.rise(body, grasp)
-    if rise.max() < p.min_lift:
-        return f"closed on {name} without lifting it"
-    lifted = rise >= p.min_lift
-    ends = {body, rec.support_of(body, grasp), rec.support_of(body, rec.last)}
-    over = [rec.bodies[b] for b in rec.graspable if b not in ends and
-            (P.over_footprint(rec.xy[:, body], rec.xy[:, b], rec.half[b, :2]) & lifted).any()]
-    words = f"picked {name}" + (f", carried it over {', '.join(over)}" if over else "")
-    if lifted[-1]:
-        return words + " and held it up"
-    return words + f" and set it down {_where(rec, body)}"
+def _did(rec: Recording, attempt: Attempt) -> str:
+    name = rec.bodies[attempt.body]
+    if attempt.kind == "push":
+        return f"pushed {name} (frame {attempt.frame})"
+    if attempt.kind == "close":
+        return (f"closed its fingers {attempt.distance * 100:.1f} cm from {name} without "
+                f"grasping it (frame {attempt.frame})")
+    hold = next(h for h in rec.holds(attempt.arm) if h.start == attempt.frame)
+    rise = rec.rise(attempt.body, hold.start)[hold.start:hold.end]
+    words = f"grasped {name} (frame {hold.start})"
+    if rise.max() >= rec.profile.min_lift:
+        words += f", lifted it {rise.max() * 100:.1f} cm"
+        over = _carried_over(rec, attempt.body, hold.start, hold.end)
+        if over:
+            words += f", carried it over {', '.join(over)}"
+    return words + (" and held it to the end" if hold.end is None else
+                    f" and let go of it at frame {hold.end}")
 
 
-def _where(rec: Recording, body: int) -> str:
-    """Where a body rests at the end: on or in another body, else beside the nearest one."""
-    end = rec.last
+def _carried_over(rec: Recording, body: int, start: int, end: int | None) -> list[str]:
+    """The bodies the held body passed over while lifted, but those it was taken from and
+    let go over."""
+    lifted = np.zeros(len(rec.trajectory), dtype=bool)
+    lifted[start:end] = rec.rise(body, start)[start:end] >= rec.profile.min_lift
+    path = rec.xy[:, body]
+    ends = [start, rec.last if end is None else end]
+    over = [P.over_footprint(path, rec.xy[:, b], rec.half[b, :2]) for b in range(len(rec.bodies))]
+    return [rec.bodies[b] for b in range(len(rec.bodies)) if b != body and
+            (over[b] & lifted).any() and not over[b][ends].any()]
+
+
+def _moved(rec: Recording, body: int) -> bool:
+    shift = float(np.linalg.norm(rec.positions[-1, body] - rec.positions[0, body]))
+    return shift >= rec.profile.push_moved or rec.tilt_deg(body) > rec.profile.topple_deg
+
+
+def _ended(rec: Recording, body: int) -> str:
+    name = rec.bodies[body]
+    if rec.z[-1, body] < rec.scene.table_height:
+        return f"{name} fell off the table"
+    shift = rec.xy[-1, body] - rec.xy[0, body]
+    words = (f"{name} ended {where(rec, body, rec.last)} (moved "
+             f"{np.linalg.norm(shift) * 100:.1f} cm {HEADINGS[_side(shift)]})")
+    if rec.tilt_deg(body) > rec.profile.topple_deg:
+        words += ", knocked over"
+    return words
+
+
+def where(rec: Recording, body: int, frame: int) -> str:
+    """Where a body is at a frame: on or in the body under it, else beside the nearest one."""
     others = np.array([b for b in range(len(rec.bodies)) if b != body])
-    offsets = rec.xy[end, body] - rec.xy[end, others]
+    offsets = rec.xy[frame, body] - rec.xy[frame, others]
     nearest = int(np.argmin(np.linalg.norm(offsets, axis=1)))
     other, offset = int(others[nearest]), offsets[nearest]
     name = rec.bodies[other]
-    if np.linalg.norm(offset) <= rec.half[other, :2].min() and rec.z[end, body] > rec.z[end, other]:
+    if np.all(np.abs(offset) <= rec.half[other, :2]) and rec.z[frame, body] > rec.z[frame, other]:
         kind = rec.scene.bodies[name].kind
         return f"{'in' if kind == 'bowl' else 'on'} {name}"
     return f"{SIDES[_side(offset)]} {name}"

@@ -1,13 +1,25 @@
-"""One trajectory prepared for scoring: the arrays every stage reads, and gripper events.
+"""One trajectory prepared for scoring: the arrays every stage reads, and the physical events
+the stages are judged on, each computed once per recording.
 
-Gripper events read the *commanded* opening (the action), not the measured one: the fingers
-stop at an object's width, so the measured opening of a firm grasp stays well above any close
-threshold, while the command says what the policy meant to do.
+Every event is read from simulated physics, never from the commanded gripper value:
+
+- a **hold** is both fingers of one arm on one movable body (the recorder's `grasped`), with
+  the measured opening above `held_opening` (the body between the fingers, not pushed by the
+  shut fingertips), for `grasp_frames` frames in a row; it ends (a **release**) when they no
+  longer are;
+- a **close** is the measured opening falling to `close_threshold` while the arm holds nothing
+  (fingers shut in free air); it goes for the body whose centre is within `reach_radius` (3-D)
+  of the grasp centre, if any;
+- a **push** is a body starting to move (`push_moved` from where it stood) while an arm's
+  gripper, or the body that arm holds, touches it (or the grasp centre is within
+  `push_contact_radius`, 3-D, in the `push_contact_frames` before);
+- an **attempt** is what an arm went for: a hold's start, a close near a body, or a push.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 import numpy as np
 
@@ -15,18 +27,38 @@ from robofollow.compiler.profile import ScoringProfile
 from robofollow.compiler.spec import Scene
 from robofollow.compiler.world import World
 from robofollow.oracle import predicates as P
-from robofollow.trajectory import ARMS, Trajectory, TrajectoryError
+from robofollow.trajectory import ARMS, Trajectory, TrajectoryError, tilt, yaw
 
-GRIPPER_COLUMNS = (6, 13)  # the gripper entries of the 14-D action, [left, right]
+GRIPPERS = ("left_gripper", "right_gripper")  # contact names of the two grippers
+ROUND = ("sphere", "cylinder", "bowl")  # footprints that do not change as the body turns
+AttemptKind = Literal["grasp", "close", "push"]
+ATTEMPT_WORDS = {"grasp": "grasped", "close": "closed its fingers at", "push": "pushed"}
 
 
 @dataclass(frozen=True, slots=True)
-class Grasp:
-    """A close of one arm's gripper near an object."""
+class Hold:
+    """Both fingers of `arm` on `body` from frame `start`; `end` is the first frame it is no
+    longer held (None: held to the last frame)."""
 
+    arm: int
+    body: int
+    start: int
+    end: int | None
+
+
+@dataclass(frozen=True, slots=True)
+class Attempt:
+    """An arm going for a body at `frame`: grasping it, closing its fingers near it, or
+    pushing it; `distance` is the grasp centre's distance to the body's centre (m, 3-D)."""
+
+    arm: int
+    body: int
     frame: int
-    body: int  # the nearest graspable body (index into the trajectory's bodies)
-    distance: float  # m, gripper to body in the plane
+    kind: AttemptKind
+    distance: float
+
+    def words(self, bodies: tuple[str, ...]) -> str:
+        return f"{ATTEMPT_WORDS[self.kind]} {bodies[self.body]} at frame {self.frame}"
 
 
 class Recording:
@@ -43,11 +75,16 @@ class Recording:
         self.xy = self.positions[:, :, :2]
         self.z = self.positions[:, :, 2]
         self.ee = np.asarray(trajectory.ee_positions, dtype=float)  # (T, 2, 3)
-        self.command = np.asarray(trajectory.action, dtype=float)[:, GRIPPER_COLUMNS]
+        self.opening = np.asarray(trajectory.gripper, dtype=float)  # (T, 2) measured
         self.half = np.array([scene.bodies[b].half_extents for b in self.bodies], dtype=float)
-        self.graspable = np.flatnonzero([not scene.bodies[b].fixture for b in self.bodies])
+        fixture = np.array([scene.bodies[b].fixture for b in self.bodies], dtype=bool)
+        self.movable = np.flatnonzero(~fixture)
+        self.spheres = np.array([scene.bodies[b].kind == "sphere" for b in self.bodies])
+        held = np.asarray(trajectory.grasped, dtype=int)
+        between = self.opening > profile.held_opening  # shut fingertips hold nothing
+        self.held = np.where((held >= 0) & ~fixture[np.maximum(held, 0)] & between, held, -1)
         self.last = len(trajectory) - 1
-        self.memo: dict = {}  # per-recording results: events, grasps, supports, stage outcomes
+        self.memo: dict = {}  # per-recording results: events, settling, stage outcomes
 
     def index(self, body: str) -> int:
         return self.bodies.index(body)
@@ -58,53 +95,170 @@ class Recording:
             self.memo[key] = compute()
         return self.memo[key]
 
-    def closes(self, arm: int, threshold: float | None = None) -> np.ndarray:
-        """Frames where the arm's gripper closes (falls to the threshold or below)."""
-        threshold = self.profile.close_threshold if threshold is None else threshold
-        return self.cached(("close", arm, threshold),
-                            lambda: P.falls(self.command[:, arm], threshold))
+    # -- grasps and releases ---------------------------------------------------------------
 
-    def opens(self, arm: int) -> np.ndarray:
-        """Frames where the arm's gripper opens (rises to the open threshold or above)."""
-        return self.cached(("open", arm),
-                            lambda: P.rises(self.command[:, arm], self.profile.open_threshold))
+    def holds(self, arm: int) -> tuple[Hold, ...]:
+        """The arm's holds in time order."""
+        return self.cached(("holds", arm), lambda: self._holds(arm))
 
-    def grasps(self, arm: int) -> list[Grasp]:
-        """The arm's grasp attempts: closes with a graspable body within the grasp radius
-        (closes in free air are not attempts). The body is the nearest one in the plane; in a
-        stack (bodies within `support_xy` of it in the plane), the one nearest the gripper in
-        height."""
-        return self.cached(("grasps", arm), lambda: self._attempts(arm))
+    def _holds(self, arm: int) -> tuple[Hold, ...]:
+        p, held = self.profile, self.held[:, arm]
+        change = np.flatnonzero(np.diff(held)) + 1
+        starts = np.concatenate(([0], change))
+        ends = np.concatenate((change, [len(held)]))
+        runs: list[list[int]] = []  # [body, start, end) with short gaps merged
+        for start, end in zip(starts, ends, strict=True):
+            body = int(held[start])
+            if body < 0:
+                continue
+            if runs and runs[-1][0] == body and start - runs[-1][2] <= p.grasp_gap:
+                runs[-1][2] = int(end)
+            else:
+                runs.append([body, int(start), int(end)])
+        return tuple(Hold(arm, body, start, None if end == len(held) else end)
+                     for body, start, end in runs if end - start >= p.grasp_frames)
 
-    def _attempts(self, arm: int) -> list[Grasp]:
-        attempts = []
+    def holding(self, arm: int) -> np.ndarray:
+        """(T,) the body the arm holds at each frame (merged holds), or -1."""
+        def compute() -> np.ndarray:
+            held = np.full(len(self.trajectory), -1)
+            for hold in self.holds(arm):
+                held[hold.start:hold.end] = hold.body
+            return held
+        return self.cached(("holding", arm), compute)
+
+    def closes(self, arm: int) -> np.ndarray:
+        """Frames where the arm's fingers shut in free air (the measured opening falls to the
+        close threshold while it holds nothing)."""
+        def compute() -> np.ndarray:
+            frames = P.falls(self.opening[:, arm], self.profile.close_threshold)
+            return frames[self.holding(arm)[frames] < 0]
+        return self.cached(("closes", arm), compute)
+
+    # -- pushes ----------------------------------------------------------------------------
+
+    def pushes(self) -> tuple[Attempt, ...]:
+        """Every movable body that started moving from where it stood, while not held, with an
+        arm at it: (arm, body, the first frame it had moved `push_moved`)."""
+        return self.cached(("pushes",), self._pushes)
+
+    def _pushes(self) -> tuple[Attempt, ...]:
+        p = self.profile
+        held = np.stack([self.holding(a) for a in range(2)], axis=1)  # (T, 2)
+        names = self.trajectory.contact_names
+        grippers = [names.index(g) for g in GRIPPERS]
+        found = []
+        for body in self.movable:
+            ever_held = np.flatnonzero((held == body).any(axis=1))
+            until = int(ever_held[0]) if len(ever_held) else len(held)
+            moved = np.linalg.norm(self.xy[:until, body] - self.xy[0, body], axis=1)
+            onset = P.first_true(moved >= p.push_moved)
+            if onset is None:
+                continue
+            window = slice(max(0, onset - p.push_contact_frames), onset + 1)
+            by = self._pusher(body, window, grippers, held)
+            if by is not None:
+                distance = float(np.linalg.norm(self.ee[onset, by] - self.positions[onset, body]))
+                found.append(Attempt(by, int(body), onset, "push", distance))
+        return tuple(sorted(found, key=lambda a: (a.frame, a.arm, a.body)))
+
+    def _pusher(self, body: int, window: slice, grippers: list[int],
+                held: np.ndarray) -> int | None:
+        """The arm touching the body (with its gripper or the body it holds) in the window,
+        else one whose grasp centre came within the push contact radius with this body the
+        nearest to it (a body pushed along by another is not the arm's)."""
+        contacts = self.trajectory.contacts[window]
+        for arm in range(2):
+            carried = held[window, arm]
+            touched = contacts[:, grippers[arm], body].any() or any(
+                contacts[i, c, body] for i, c in enumerate(carried) if c >= 0)
+            if touched:
+                return arm
+        for frame in range(window.start, window.stop):  # the body nearest a grasp centre
+            gaps = np.linalg.norm(self.positions[frame, self.movable][:, None] - self.ee[frame],
+                                  axis=2)  # (movable, arm)
+            for arm in np.argsort(gaps.min(axis=0)):
+                nearest = int(np.argmin(gaps[:, arm]))
+                if self.movable[nearest] == body and \
+                        gaps[nearest, arm] <= self.profile.push_contact_radius:
+                    return int(arm)
+        return None
+
+    # -- attempts --------------------------------------------------------------------------
+
+    def attempts(self, arm: int) -> tuple[Attempt, ...]:
+        """What the arm went for, in time order: grasps, closes near a body, pushes."""
+        return self.cached(("attempts", arm), lambda: self._attempts(arm))
+
+    def _attempts(self, arm: int) -> tuple[Attempt, ...]:
+        found = [Attempt(arm, h.body, h.start, "grasp", self._gap(arm, h.body, h.start))
+                 for h in self.holds(arm)]
         for frame in self.closes(arm):
             frame = int(frame)
-            ee = self.ee[frame, arm]
-            body, distance = P.nearest(self.xy[frame], ee[:2], self.graspable)
-            if distance < self.profile.grasp_radius:
-                attempts.append(Grasp(frame, self._in_stack(body, frame, ee[2]), distance))
-        return attempts
+            gaps = np.linalg.norm(self.positions[frame, self.movable] - self.ee[frame, arm],
+                                  axis=1)
+            nearest = int(np.argmin(gaps))
+            if gaps[nearest] <= self.profile.reach_radius:
+                found.append(Attempt(arm, int(self.movable[nearest]), frame, "close",
+                                     float(gaps[nearest])))
+        found += [a for a in self.pushes() if a.arm == arm]
+        return tuple(sorted(found, key=lambda a: (a.frame, a.body)))
 
-    def _in_stack(self, body: int, frame: int, height: float) -> int:
-        """Of the bodies stacked with `body` (itself included), the one nearest `height`."""
-        offset = np.linalg.norm(self.xy[frame, self.graspable] - self.xy[frame, body], axis=1)
-        stack = self.graspable[offset <= self.profile.support_xy]
-        return int(stack[np.argmin(np.abs(self.z[frame, stack] - height))])
+    def _gap(self, arm: int, body: int, frame: int) -> float:
+        return float(np.linalg.norm(self.ee[frame, arm] - self.positions[frame, body]))
+
+    def first_attempt(self, arm: int, after: int = 0,
+                      kinds: tuple[AttemptKind, ...] = ("grasp", "close", "push"),
+                      body: int | None = None) -> Attempt | None:
+        """The arm's first attempt of those kinds at or after `after` (on `body`, if given)."""
+        return next((a for a in self.attempts(arm) if a.frame >= after and a.kind in kinds
+                     and (body is None or a.body == body)), None)
+
+    # -- where bodies are ------------------------------------------------------------------
+
+    def settled(self, body: int, after: int) -> int:
+        """The first frame at or after `after` from which the body keeps within
+        `settle_range` for `settle_frames` frames (the last frame if it never does)."""
+        def compute() -> int:
+            p = self.profile
+            steady = P.steady(self.positions[after:, body], p.settle_frames, p.settle_range)
+            hits = np.flatnonzero(steady)
+            return after + int(hits[0]) if len(hits) else self.last
+        return self.cached(("settled", body, after), compute)
+
+    def heights_above_surface(self, body: int, frames: slice) -> np.ndarray:
+        """(F,) how far the body's bottom is above what is under it over a range of frames
+        (m): the top of the highest other body whose footprint overlaps its own and whose top
+        is below its centre, else the table."""
+        xy, z = self.xy[frames, body], self.z[frames, body]  # (F, 2), (F,)
+        reach = self.half[:, :2] + self.half[body, :2]
+        over = np.all(np.abs(self.xy[frames] - xy[:, None]) < reach, axis=2)
+        tops = self.z[frames] + self.half[:, 2]  # (F, B)
+        below = over & (tops <= z[:, None])
+        below[:, body] = False
+        surface = np.where(below, tops, -np.inf).max(axis=1)
+        return self.bottom(body)[frames] - np.maximum(surface, self.scene.table_height)
+
+    def footprint(self, body: int) -> np.ndarray:
+        """(T, 2) half extents in x and y of the body's footprint as it turns."""
+        kind = self.scene.bodies[self.bodies[body]].kind
+        return P.footprint(self.half[body], yaw(self.trajectory.quaternions[:, body]),
+                           kind in ROUND)
 
     def support_of(self, body: int, frame: int) -> int | None:
         """The body directly under `body` at this frame, if it rests on one."""
-        return self.cached(("support", body, frame), lambda: self._support_of(body, frame))
-
-    def _support_of(self, body: int, frame: int) -> int | None:
         p = self.profile
         offset = np.linalg.norm(self.xy[frame] - self.xy[frame, body], axis=1)
         drop = self.z[frame, body] - self.z[frame]
         under = np.flatnonzero((offset <= p.support_xy) & (drop >= p.support_rise))
         return int(under[np.argmax(self.z[frame, under])]) if len(under) else None
 
-    def first_grasp(self, arm: int, after: int = 0) -> Grasp | None:
-        return next((g for g in self.grasps(arm) if g.frame >= after), None)
+    def tilt_deg(self, body: int) -> float:
+        """How far the body has tipped over since the start (deg; 0 for spheres)."""
+        if self.spheres[body]:
+            return 0.0
+        q = self.trajectory.quaternions
+        return float(np.degrees(tilt(q[0, body], q[-1, body])))
 
     def rise(self, body: int, since: int) -> np.ndarray:
         """(T,) height of a body above where it was at frame `since` (m)."""

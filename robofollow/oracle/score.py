@@ -2,40 +2,30 @@
 
 Gating is strict: a stage's Intent counts only when every earlier stage's Intent is full; its
 Execution only when every earlier stage is full in both and its own Intent is. The instructed
-arm is part of the instruction: the source stage is the named arm's, and it earns no Intent when
-the other arm grasped first. A sequence's steps must start in order. A conditional is scored on
-the branch its condition selects; starting the other branch is reported. Completion: every
-stage but the finish executed in full.
+arm is part of the instruction: a step's source stage earns no Intent when the other arm went
+for that step's object first. A sequence's steps must start in order. A conditional is scored
+on the branch its condition selects; carrying out the other branch too (at any time) voids the
+credit: no branch was chosen. Completion follows the paper (see `complete`).
 """
 
 from __future__ import annotations
 
 import itertools
-import json
-from functools import lru_cache
 
 from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.goals import goal_graph, stage_order
+from robofollow.compiler.goals import scoring_nodes
 from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
 from robofollow.compiler.spec import Scene
 from robofollow.compiler.training import describe
+from robofollow.oracle.chance import passes_work
 from robofollow.oracle.instead import describe_actions
 from robofollow.oracle.recording import Recording, arm_index
 from robofollow.oracle.results import EpisodeScore, ExecutedBehaviour, StageResult
-from robofollow.oracle.stages import EVALUATORS, Outcome
+from robofollow.oracle.stages import AT_REST, EVALUATORS, Outcome
 from robofollow.trajectory import ARMS, Trajectory
 
 FULL = 0.99  # a score at least this share of its maximum counts as full credit
-
-
-@lru_cache(maxsize=4096)
-def scoring_nodes(behaviour: Behaviour,
-                  profile: ScoringProfile) -> tuple[tuple[str, dict, str], ...]:
-    """The goal DAG's nodes in scoring order, each with a key naming what it checks (equal
-    keys in different behaviours evaluate alike, so a recording evaluates them once)."""
-    graph = goal_graph(behaviour, profile)
-    return tuple((n, graph.nodes[n], json.dumps([graph.nodes[n][k] for k in (
-        "name", "arm", "intent", "execution")], sort_keys=True)) for n in stage_order(graph))
+SOURCE_STAGES = ("source_grounding", "push_contact")
 
 
 def score(behaviour: Behaviour, trajectory: Trajectory, scene: Scene,
@@ -45,35 +35,85 @@ def score(behaviour: Behaviour, trajectory: Trajectory, scene: Scene,
     scene's training behaviours by label) are what 'what it did instead' is matched against,
     besides the instructed behaviour and a conditional's other branch."""
     rec = Recording(trajectory, scene, profile)
-    stages = evaluate(rec, behaviour)
+    stages, marks = evaluate(rec, behaviour)
     other = None
     options = [("instructed", behaviour)]
     if behaviour.other is not None:
         branch = Behaviour(steps=behaviour.other)
-        other_stages = evaluate(rec, branch)
-        finish = sum(s.weight for s in other_stages if s.name == "finish")
-        other = _total(other_stages, "intent") >= (1.0 - finish) * FULL and bool(branch.steps)
+        other = _carried_out(rec, branch, behaviour)
         options.append(("other branch", branch))
+        if other:
+            stages = [_void(s) for s in stages]
     options += list((candidates or {}).items())
     return EpisodeScore(episode=episode, intent_score=_total(stages, "intent"),
                         execution_score=_total(stages, "execution"),
-                        complete=complete(stages), stages=tuple(stages),
-                        executed_behaviour=_closest(rec, options), other_branch=other,
-                        profile=profile.model_dump(mode="json"))
+                        complete=complete(rec, behaviour, stages, marks, bool(other)),
+                        stages=tuple(stages), executed_behaviour=_closest(rec, options),
+                        other_branch=other, profile=profile.model_dump(mode="json"))
 
 
 def _total(stages: list[StageResult], key: str) -> float:
     return round(sum(getattr(s, key) for s in stages), 6)
 
 
-def complete(stages: list[StageResult]) -> bool:
-    """Every stage but the finish executed in full (the finish alone, when it is all)."""
-    scored = [s for s in stages if s.name != "finish"] or stages
-    return all(s.execution >= s.weight * FULL for s in scored)
+def _carried_out(rec: Recording, branch: Behaviour, selected: Behaviour) -> bool:
+    """Whether the branch not selected was carried out: every stage of it but the finish
+    earned its Intent, and performing the selected branch does not already do that (it is
+    not contained in it)."""
+    if not branch.steps or passes_work(branch, selected, rec.profile):
+        return False
+    stages, _ = evaluate(rec, branch)
+    return all(s.intent >= s.weight * FULL for s in stages if s.name != "finish")
 
 
-def evaluate(rec: Recording, behaviour: Behaviour) -> list[StageResult]:
-    """Each stage of the behaviour's goal DAG, gated."""
+def _void(stage: StageResult) -> StageResult:
+    if not stage.intent:
+        return stage
+    return stage.model_copy(update={"intent": 0.0, "execution": 0.0, "reason": (
+        f"{stage.reason} (not credited: the branch the condition does not select was carried "
+        "out too)")})
+
+
+def complete(rec: Recording, behaviour: Behaviour, stages: list[StageResult], marks: dict,
+             other_branch: bool = False) -> bool:
+    """Completion. Profile 'strict': every stage but the finish executed in full. Profile
+    'paper' (the default), action-dependent as the paper defines it: pickups and sequences of
+    pickups need final IS and ES of at least `pickup_complete` (0.8); a transfer (Scene 3) needs its final
+    placement-and-orientation stage executed (gated); any other action needs its final state
+    over the last `final_frames` frames (the object at rest in the asked relation / on / in
+    the target, let go of; a pushed object moved far enough towards the target), the object
+    having been handled by the named arm. A branch asking for nothing is complete when
+    nothing was done; a conditional whose other branch was carried out is not."""
+    if other_branch:
+        return False
+    if rec.profile.completion == "strict" or not behaviour.steps:
+        scored = [s for s in stages if s.name != "finish"] or stages
+        return all(s.execution >= s.weight * FULL for s in scored)
+    if all(step.action == "pick" for step in behaviour.steps):
+        least = rec.profile.pickup_complete - 1e-6
+        return _total(stages, "intent") >= least and _total(stages, "execution") >= least
+    if any(s.name == "orientation" for s in stages):
+        outcome = next(s for s in stages if s.name == "orientation")
+        return outcome.execution > 0
+    nodes = scoring_nodes(behaviour, rec.profile)
+    return all(_final_state(rec, node) for _, node, _ in nodes
+               if node["name"] not in SOURCE_STAGES + ("finish",))
+
+
+def _final_state(rec: Recording, node: dict) -> bool:
+    """The objective's end state holds over the last frames, brought about by the named arm
+    and let go of."""
+    params = node["execution"]["params"]
+    arm, source = arm_index(node["arm"]), rec.index(params["object"])
+    if rec.first_attempt(arm, body=source) is None or rec.holding(arm)[-1] == source:
+        return False
+    check = AT_REST[node["execution"]["predicate"]]
+    last = range(max(0, rec.last - rec.profile.final_frames + 1), rec.last + 1)
+    return all(check(rec, params, frame) is None for frame in last)
+
+
+def evaluate(rec: Recording, behaviour: Behaviour) -> tuple[list[StageResult], dict]:
+    """Each stage of the behaviour's goal DAG, gated; and the marks each step left."""
     nodes = scoring_nodes(behaviour, rec.profile)
     marks: dict[str, dict] = {}
     reversed_steps = _reverse_order(rec, behaviour)
@@ -88,7 +128,7 @@ def evaluate(rec: Recording, behaviour: Behaviour) -> list[StageResult]:
         else:
             _prepare(node, mark, marks, step, behaviour)
             outcome = _evaluate_node(rec, node, key, mark)
-            if node["stage"] == 1 and len(behaviour.steps) == 1:
+            if node["name"] in SOURCE_STAGES:
                 outcome = _first_arm(rec, node, outcome)
         intent = outcome.intent and not blocked_intent
         execution = outcome.execution and intent and not blocked_execution
@@ -102,7 +142,7 @@ def evaluate(rec: Recording, behaviour: Behaviour) -> list[StageResult]:
                                    first_step=outcome.frame, reason=reason))
         blocked_intent = blocked_intent or (None if intent else node_id)
         blocked_execution = blocked_execution or (None if execution else node_id)
-    return results
+    return results, marks
 
 
 def _evaluate_node(rec: Recording, node: dict, key: str, mark: dict) -> Outcome:
@@ -118,14 +158,25 @@ def _evaluate_node(rec: Recording, node: dict, key: str, mark: dict) -> Outcome:
 
 def _prepare(node: dict, mark: dict, marks: dict, step: str, behaviour: Behaviour) -> None:
     """Hand a stage the frames it starts from: a sequence step's search starts where the
-    previous step lifted its object; the finish starts when the last step completed."""
+    previous step lifted its object; the finish starts when the last step completed (its
+    release, else its objective, lift or attempt) and knows where each handled object came
+    to rest."""
     if node["name"] == "finish":
         last = marks.get(_last_step(behaviour), {})
-        mark["completion"] = next((last[k] for k in ("release", "objective", "lift", "grasp")
+        mark["completion"] = next((last[k] for k in ("release", "objective", "lift", "attempt")
                                    if k in last), 0)
+        mark["rests"] = tuple((s.source, marks[key]["rest"]) for key, s in _steps(behaviour)
+                              if "rest" in marks.get(key, {}))
     elif step.startswith("step") and _step_number(step) > 1:
         previous = marks[f"step{_step_number(step) - 1}"]
-        mark.setdefault("start", previous.get("lift", previous.get("grasp", 0)))
+        mark.setdefault("start", previous.get("lift", previous.get("attempt", 0)))
+
+
+def _steps(behaviour: Behaviour) -> list[tuple[str, object]]:
+    """(marks key, step) of each step."""
+    if len(behaviour.steps) == 1:
+        return [("", behaviour.steps[0])]
+    return [(f"step{i}", s) for i, s in enumerate(behaviour.steps, start=1)]
 
 
 def _step_number(step: str) -> int:
@@ -138,25 +189,26 @@ def _last_step(behaviour: Behaviour) -> str:
 
 
 def _first_arm(rec: Recording, node: dict, outcome: Outcome) -> Outcome:
-    """The named arm must make the first grasp: the other arm grasping first (or alone)
-    takes the source stage's Intent."""
-    if node["arm"] is None:
+    """The named arm must go for its step's object first: the other arm going for that
+    object before it (or instead of it) takes the source stage's Intent."""
+    named = arm_index(node["arm"])
+    body = rec.index(node["intent"]["params"]["object"])
+    theirs = rec.first_attempt(1 - named, body=body)
+    if theirs is None:
         return outcome
-    other = 1 - arm_index(node["arm"])
-    grasp = rec.first_grasp(other)
-    if grasp is None or (outcome.frame is not None and grasp.frame > outcome.frame):
+    ours = rec.first_attempt(named, body=body)
+    if ours is not None and ours.frame <= theirs.frame:
         return outcome
-    return Outcome(False, False, grasp.frame, f"the {ARMS[other]} arm, not the {node['arm']}, "
-                   f"grasped first ({rec.bodies[grasp.body]} at frame {grasp.frame})")
+    return Outcome(False, False, theirs.frame, f"the {ARMS[1 - named]} arm, not the "
+                   f"{node['arm']}, {theirs.words(rec.bodies)}")
 
 
 def _reverse_order(rec: Recording, behaviour: Behaviour) -> str | None:
-    """A sequence whose later step's object was taken before an earlier step's."""
+    """A sequence whose later step's object was gone for before an earlier step's."""
     starts = []
     for step in behaviour.steps if len(behaviour.steps) > 1 else ():
-        source = rec.index(step.source)
-        frames = [g.frame for g in rec.grasps(arm_index(step.arm)) if g.body == source]
-        starts.append((step.source, frames[0] if frames else None))
+        attempt = rec.first_attempt(arm_index(step.arm), body=rec.index(step.source))
+        starts.append((step.source, attempt.frame if attempt else None))
     for (earlier, a), (later, b) in itertools.pairwise(starts):
         if b is not None and (a is None or b < a):
             return f"out of order: {later} was taken before {earlier}"
@@ -172,7 +224,7 @@ def _closest(rec: Recording, options: list[tuple[str, Behaviour]]) -> ExecutedBe
         if behaviour.steps in seen or not _bodies(behaviour) <= set(rec.bodies):
             continue  # already matched under another name, or made for another layout
         seen.add(behaviour.steps)
-        stages = evaluate(rec, behaviour)
+        stages, _ = evaluate(rec, behaviour)
         scores = (_total(stages, "intent"), _total(stages, "execution"))
         key = (round(sum(scores), 6), len(stages))
         if key > best_key:

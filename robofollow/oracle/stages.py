@@ -1,23 +1,24 @@
-"""Each goal-DAG stage grounded on a Recording: did the policy mean it (Intent), did it do it
-(Execution), from which frame, and why not.
+"""Each goal-DAG stage grounded on a Recording's physical events: did the policy mean it
+(Intent: the right object, side, bowl, label, waypoint), did it do it (Execution: grasped and
+lifted, released low, at rest within the precision tolerances), from which frame, and why not.
 
 A stage evaluator reads its node's predicate parameters and the frames earlier stages of the
-same step left in `marks` (grasp, lift, release, objective) and returns an Outcome. Gating and
-weights are the scorer's business, not the evaluators'.
+same step left in `marks` (attempt, hold, lift, release, objective, rest) and returns an
+Outcome. Gating, weights, the arm rules and completion are the scorer's business.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
 
-from robofollow.compiler.behaviour import Step
-from robofollow.compiler.splits import passes_over
 from robofollow.compiler.world import DIRECTIONS
 from robofollow.oracle import predicates as P
 from robofollow.oracle.recording import Recording, arm_index
+from robofollow.oracle.instead import where
 from robofollow.trajectory import ARMS, yaw
 
 
@@ -29,267 +30,479 @@ class Outcome:
     reason: str
 
 
-def _cm(metres: float) -> str:
+def cm(metres: float) -> str:
     return f"{metres * 100:.1f} cm"
 
 
-def grasp(rec: Recording, node: dict, marks: dict) -> Outcome:
-    """Source grounding: the arm's first grasp attempt (from `marks['start']`) is on the
-    source; Execution: the source then rises by the stage's lift (and its support does not)."""
+# -- source grounding -------------------------------------------------------------------------
+
+def went_for(rec: Recording, node: dict, marks: dict) -> Outcome:
+    """Intent: the first body the arm grasps or closes its fingers at (from `marks['start']`)
+    is the source. Execution: the arm then holds the source and lifts it (and not the body
+    it stood on with it)."""
     params, lift = node["intent"]["params"], node["execution"]["params"]["min_lift"]
-    arm, source = arm_index(params["arm"]), rec.index(params["object"])
-    attempt = rec.first_grasp(arm, marks.get("start", 0))
+    arm, source, name = arm_index(params["arm"]), rec.index(params["object"]), params["object"]
+    attempt = rec.first_attempt(arm, marks.get("start", 0), ("grasp", "close"))
     if attempt is None:
-        return Outcome(False, False, None, f"the {params['arm']} arm never closed on an object")
-    t = attempt.frame
-    marks["grasp"] = t
+        return Outcome(False, False, None, f"the {params['arm']} arm never went for an object")
+    t = marks["attempt"] = attempt.frame
     if attempt.body != source:
-        return Outcome(False, False, t, f"the {params['arm']} arm first closed on "
-                       f"{rec.bodies[attempt.body]} (frame {t}), not {params['object']}")
-    rise = rec.rise(source, t)
-    lifted = P.first_true(rise >= rec.profile.min_lift, t)
-    if lifted is not None:
-        marks["lift"] = lifted
-    found = f"closed on {params['object']} at frame {t} ({_cm(attempt.distance)} off)"
-    best = float(rise[t:].max())
-    if best < lift:
-        return Outcome(True, False, t, f"{found}, but lifted it {_cm(best)} (needs {_cm(lift)})")
-    support = rec.support_of(source, t)
-    if support is not None and rec.rise(support, t)[t:].max() >= rec.profile.min_lift:
-        return Outcome(True, False, t, f"{found}, but lifted {rec.bodies[support]} with it")
-    return Outcome(True, True, t, f"{found} and lifted it {_cm(best)}")
+        return Outcome(False, False, t, f"the {params['arm']} arm first "
+                       f"{attempt.words(rec.bodies)}, not {name}")
+    found = attempt.words(rec.bodies)
+    best = 0.0
+    for hold in (h for h in rec.holds(arm) if h.body == source and h.start >= t):
+        rise = rec.rise(source, hold.start)[hold.start:hold.end]
+        lifted = P.first_true(rise >= rec.profile.min_lift)
+        if lifted is not None and "lift" not in marks:
+            marks["hold"], marks["lift"] = hold.start, hold.start + lifted
+        best = max(best, float(rise.max()))
+        if rise.max() >= lift:
+            support = rec.support_of(source, hold.start)
+            if support is not None and \
+                    rec.rise(support, hold.start)[hold.start:hold.end].max() >= rec.profile.min_lift:
+                return Outcome(True, False, t, f"{found}, but lifted {rec.bodies[support]} "
+                               "with it")
+            return Outcome(True, True, t, f"{found} and lifted it {cm(best)}")
+    if not any(h.body == source for h in rec.holds(arm)):
+        return Outcome(True, False, t, f"{found}, but never grasped it")
+    return Outcome(True, False, t, f"{found}, but lifted it {cm(best)} (needs {cm(lift)})")
 
 
 def push_contact(rec: Recording, node: dict, marks: dict) -> Outcome:
-    """Push contact: with the gripper closed, the arm is at the source (nearest, within the
-    radius) while the source slides on the table; Execution: low enough at first contact."""
-    p, intent, execution = rec.profile, node["intent"]["params"], node["execution"]["params"]
-    arm, source = arm_index(intent["arm"]), rec.index(intent["object"])
-    t = P.first(rec.closes(arm, intent["close"]))
-    if t is None:
-        return Outcome(False, False, None, f"the {intent['arm']} arm never closed its gripper "
-                       "to push")
-    marks["grasp"] = t
-    shift = np.linalg.norm(rec.xy[:, source] - rec.xy[t, source], axis=1)
-    sliding = (shift >= p.push_moved) & (np.abs(rec.rise(source, 0)) <= p.on_table_tolerance)
-    sliding[:t + 1] = False
-    frames = np.flatnonzero(sliding)
-    if not len(frames):
-        return Outcome(False, False, None, f"{intent['object']} never slid on the table")
-    ee = rec.ee[frames, arm, :2]
-    distances = np.linalg.norm(rec.xy[frames][:, rec.graspable] - ee[:, None], axis=2)
-    nearest = rec.graspable[np.argmin(distances, axis=1)]
-    gap = np.linalg.norm(rec.xy[frames, source] - ee, axis=1)
-    at_source = nearest == source
-    touching = np.flatnonzero(at_source & (gap < intent["radius"]))
-    if not len(touching):
-        return Outcome(False, False, int(frames[0]), f"{intent['object']} slid, but the "
-                       f"{intent['arm']} gripper was not at it")
-    contact = int(frames[touching[0]])
-    height = abs(rec.ee[frames[0], arm, 2] - rec.z[0, source])
+    """Intent: the first body the arm grasps or pushes is the source, pushed. Execution: the
+    gripper was closed and low when the source started to move."""
+    intent, execution = node["intent"]["params"], node["execution"]["params"]
+    arm, source, name = arm_index(intent["arm"]), rec.index(intent["object"]), intent["object"]
+    attempt = rec.first_attempt(arm, marks.get("start", 0), ("grasp", "push"))
+    if attempt is None:
+        return Outcome(False, False, None, f"the {intent['arm']} arm never pushed an object")
+    t = marks["attempt"] = attempt.frame
+    if attempt.body != source or attempt.kind != "push":
+        return Outcome(False, False, t, f"the {intent['arm']} arm first "
+                       f"{attempt.words(rec.bodies)}, not pushed {name}")
+    opening = float(rec.opening[t, arm])
+    if opening > execution["close"]:
+        return Outcome(True, False, t, f"pushed {name} at frame {t} with the gripper open "
+                       f"({opening:.2f}; closed is {execution['close']:.2f} or less)")
+    height = abs(float(rec.ee[t, arm, 2] - rec.z[0, source]))
     if height > execution["height"]:
-        return Outcome(True, False, contact, f"pushed {intent['object']} from {_cm(height)} "
-                       f"above it (limit {_cm(execution['height'])})")
-    if not np.any(at_source & (gap < execution["radius"])):
-        return Outcome(True, False, contact, f"lost contact with {intent['object']}")
-    return Outcome(True, True, contact, f"pushed {intent['object']} from frame {contact}")
+        return Outcome(True, False, t, f"pushed {name} from {cm(height)} above it (limit "
+                       f"{cm(execution['height'])})")
+    return Outcome(True, True, t, f"pushed {name} from frame {t}, the gripper closed")
 
 
 def pushed_towards(rec: Recording, node: dict, marks: dict) -> Outcome:
-    """The source moves towards the target's start, pushed from behind (Intent and Execution
-    differ in the displacement they need)."""
+    """Intent: pushed from behind, the source moves towards the target's start. Execution:
+    where it comes to rest, it has moved far enough that way."""
     intent, execution = node["intent"]["params"], node["execution"]["params"]
-    source, target = rec.index(intent["object"]), rec.index(intent["target"])
-    arm, t = arm_index(node["arm"]), marks["grasp"]
-    direction = rec.xy[0, target] - rec.xy[0, source]
-    direction = direction / max(np.linalg.norm(direction), 1e-9)
-    moved = P.progress(rec.xy[:, source] - rec.xy[t, source], direction, intent["cone_deg"])
+    source, arm, t = rec.index(intent["object"]), arm_index(node["arm"]), marks["attempt"]
+    direction = _direction(rec, intent)
+    moved = P.progress(rec.xy[:, source] - rec.xy[0, source], direction, intent["cone_deg"])
     behind = (rec.ee[:, arm, :2] - rec.xy[:, source]) @ direction <= 0
     moved = np.where(behind, moved, 0.0)
-    moved[:t + 1] = 0.0
+    moved[:t] = 0.0
     best = float(moved.max())
     frame = P.first_true(moved >= intent["min_displacement"])
+    what = f"{intent['object']} towards {intent['target']}"
     if frame is None:
-        return Outcome(False, False, None, f"{intent['object']} moved {_cm(best)} towards "
-                       f"{intent['target']} (needs {_cm(intent['min_displacement'])})")
+        return Outcome(False, False, None, f"pushed {what} {cm(best)} (needs "
+                       f"{cm(intent['min_displacement'])})")
     marks["objective"] = frame
-    done = best >= execution["min_displacement"]
-    return Outcome(True, done, frame, f"pushed {intent['object']} {_cm(best)} towards "
-                   f"{intent['target']}" + ("" if done else
-                                            f" (needs {_cm(execution['min_displacement'])})"))
+    rest = marks["rest"] = rec.settled(source, int(np.argmax(moved)))
+    problem = _pushed_far(rec, execution, rest)
+    if problem is not None:
+        return Outcome(True, False, frame, f"pushed {what}, but where it came to rest "
+                       f"{problem}")
+    return Outcome(True, True, frame, f"pushed {what}, at rest from frame {rest}")
 
 
-def _release(rec: Recording, arm: int, marks: dict) -> int | None:
-    release = P.first(rec.opens(arm), marks.get("lift", marks["grasp"]) + 1)
-    if release is not None:
-        marks["release"] = release
-    return release
+def _direction(rec: Recording, p: dict) -> np.ndarray:
+    """The unit direction from the source's start to the target's."""
+    vector = rec.xy[0, rec.index(p["target"])] - rec.xy[0, rec.index(p["object"])]
+    return vector / max(float(np.linalg.norm(vector)), 1e-9)
 
 
-def _placed(rec: Recording, node: dict, marks: dict, holds: tuple[np.ndarray, np.ndarray],
-            where: str, steady: np.ndarray | None = None) -> Outcome:
-    """Shared shape of the placing stages: Intent when `holds` first after the lift with the
-    intent thresholds; Execution when the final thresholds hold at release and at the end
-    (and `steady` from release on)."""
-    intent_holds, final_holds = holds
-    source = node["intent"]["params"]["object"]
-    start = marks.get("lift")
-    if start is None:
-        return Outcome(False, False, None, f"{source} was never lifted")
-    frame = P.first_true(intent_holds, start)
-    if frame is None:
-        return Outcome(False, False, None, f"{source} never got {where}")
-    marks["objective"] = frame
-    release = _release(rec, arm_index(node["arm"]), marks)
-    if release is None:
-        return Outcome(True, False, frame, f"{source} got {where} at frame {frame} but was "
-                       "never released")
-    if not final_holds[release]:
-        return Outcome(True, False, frame, f"{source} was released at frame {release}, not "
-                       f"{where}")
-    if not final_holds[-1] or (steady is not None and not steady[release:].all()):
-        return Outcome(True, False, frame, f"{source} was released {where} but did not stay")
-    return Outcome(True, True, frame, f"{source} released {where} at frame {release}")
+def _pushed_far(rec: Recording, p: dict, frame: int) -> str | None:
+    """Moved far enough towards the target's start (within the cone) by `frame`."""
+    source = rec.index(p["object"])
+    shift = rec.xy[frame:frame + 1, source] - rec.xy[0, source]
+    moved = float(P.progress(shift, _direction(rec, p), p["cone_deg"])[0])
+    if moved < p["min_displacement"]:
+        return (f"it had moved {cm(moved)} towards {p['target']} (needs "
+                f"{cm(p['min_displacement'])})")
+    return None
+
+
+# -- setting down: one rule for relations, stacks, bowls and labels --------------------------
+
+@dataclass(frozen=True, slots=True)
+class Delivery:
+    """Where a carried object was let go of (or, still held at the end, brought lowest)."""
+
+    frame: int
+    released: bool
+    height: float  # m: its bottom above the surface under it, then
+    rest: int | None  # the frame it came to rest after release
+
+
+def deliveries(rec: Recording, arm: int, body: int, after: int) -> tuple[Delivery, ...]:
+    """Each time the arm let go of `body` after frame `after` (the lift), in order; a hold
+    lasting to the end counts where the body came lowest, if within `set_down_height`."""
+    def compute() -> tuple[Delivery, ...]:
+        found = []
+        for hold in rec.holds(arm):
+            if hold.body != body or (hold.end is not None and hold.end <= after):
+                continue
+            if hold.end is not None:
+                height = rec.heights_above_surface(body, slice(hold.end, hold.end + 1))[0]
+                found.append(Delivery(hold.end, True, float(height),
+                                      rec.settled(body, hold.end)))
+                continue
+            first = max(after, hold.start)
+            heights = rec.heights_above_surface(body, slice(first, None))
+            lowest = int(np.argmin(heights))
+            if heights[lowest] <= rec.profile.set_down_height:
+                found.append(Delivery(first + lowest, False, float(heights[lowest]), None))
+        return tuple(found)
+    return rec.cached(("deliveries", arm, body, after), compute)
+
+
+Check = Callable[[Recording, dict, int], "str | None"]  # (rec, params, frame) -> what is wrong
+
+
+def _placed(rec: Recording, node: dict, marks: dict, aim: Check, exact: Check,
+            wanted: str) -> Outcome:
+    """Intent: a delivery passes `aim` (the right side, bowl, label). Execution: such a
+    delivery was a release low over the surface (not a drop), and where the object came to
+    rest passes `exact` (distance, resting, orientation)."""
+    intent, execution = node["intent"]["params"], node["execution"]["params"]
+    name = intent["object"]
+    if "lift" not in marks:
+        return Outcome(False, False, None, f"{name} was never lifted")
+    found = deliveries(rec, arm_index(node["arm"]), rec.index(name), marks["lift"])
+    if not found:
+        return Outcome(False, False, None, f"{name} was never set down or let go of")
+    aimed = [d for d in found if aim(rec, intent, d.frame) is None]
+    if not aimed:
+        first = found[0]
+        return Outcome(False, False, first.frame, f"{name} was {_let_go(first)} "
+                       f"{where(rec, rec.index(name), first.frame)}, not {wanted} "
+                       f"({aim(rec, intent, first.frame)})")
+    marks["objective"], marks["rest"] = aimed[0].frame, aimed[0].rest
+    problems = []
+    for delivery in aimed:
+        problem = _placing_problem(rec, execution, delivery, exact)
+        if problem is None:
+            marks["release"], marks["rest"] = delivery.frame, delivery.rest
+            return Outcome(True, True, aimed[0].frame, f"{name} released {wanted} at frame "
+                           f"{delivery.frame}, at rest from frame {delivery.rest}")
+        problems.append(problem)
+    return Outcome(True, False, aimed[0].frame, f"{name} was brought {wanted} at frame "
+                   f"{aimed[0].frame}, but {problems[0]}")
+
+
+def _let_go(delivery: Delivery) -> str:
+    return "released" if delivery.released else "held"
+
+
+def _placing_problem(rec: Recording, params: dict, delivery: Delivery,
+                     exact: Check) -> str | None:
+    if not delivery.released:
+        return "it was never released"
+    if delivery.height > rec.profile.set_down_height:
+        return (f"it was dropped from {cm(delivery.height)} above the surface (a placement "
+                f"lets go within {cm(rec.profile.set_down_height)})")
+    problem = exact(rec, params, delivery.rest)
+    return None if problem is None else f"where it came to rest, {problem}"
+
+
+def _nearest(rec: Recording, body: int, frame: int, kinds: tuple[str, ...] | None) -> int:
+    """The other body (of those kinds, if given) nearest `body` in the plane at `frame`."""
+    others = [b for b in range(len(rec.bodies)) if b != body and
+              (kinds is None or rec.scene.bodies[rec.bodies[b]].kind in kinds)]
+    gaps = np.linalg.norm(rec.xy[frame, others] - rec.xy[frame, body], axis=1)
+    return others[int(np.argmin(gaps))]
+
+
+def _aimed_at(kinds: tuple[str, ...] | None, key: str) -> Check:
+    """Delivered nearest the asked body (of the kinds), within the aim radius."""
+    def check(rec: Recording, p: dict, frame: int) -> str | None:
+        source, target = rec.index(p["object"]), rec.index(p[key])
+        nearest = _nearest(rec, source, frame, kinds)
+        gap = float(np.linalg.norm(rec.xy[frame, source] - rec.xy[frame, target]))
+        if nearest != target:
+            return f"nearest {rec.bodies[nearest]}"
+        if gap > p["radius"]:
+            return f"{cm(gap)} from {p[key]}'s centre"
+        return None
+    return check
+
+
+def _towards(rec: Recording, p: dict, frame: int) -> str | None:
+    """Delivered on the asked side of the landmark (any distance); 'next to': the landmark
+    is the nearest body."""
+    source, landmark = rec.index(p["object"]), rec.index(p["landmark"])
+    direction = DIRECTIONS.get(p["relation"])
+    if direction is None:
+        nearest = _nearest(rec, source, frame, None)
+        return None if nearest == landmark else f"nearest {rec.bodies[nearest]}"
+    offset = rec.xy[frame, source] - rec.xy[frame, landmark]
+    return None if P.in_cone(offset, direction, p["cone_deg"]) else "on another side"
+
+
+def _in_relation(rec: Recording, p: dict, frame: int) -> str | None:
+    source, landmark = rec.index(p["object"]), rec.index(p["landmark"])
+    offset = rec.xy[frame, source] - rec.xy[frame, landmark]
+    distance = float(np.linalg.norm(offset))
+    direction = DIRECTIONS.get(p["relation"])
+    if direction is not None and not P.in_cone(offset, direction, p["cone_deg"]):
+        return f"it is not {p['relation'].replace('_', ' ')} {p['landmark']}"
+    if distance > p["range"]:
+        return f"it is {cm(distance)} from {p['landmark']} (at most {cm(p['range'])})"
+    height = float(rec.bottom(source)[frame] - rec.scene.table_height)
+    if abs(height) > p["rest"]:
+        return f"it is not on the table ({cm(height)} above it)"
+    return None
+
+
+def _on(rec: Recording, p: dict, frame: int) -> str | None:
+    source, target = rec.index(p["object"]), rec.index(p["target"])
+    offset = float(np.linalg.norm(rec.xy[frame, source] - rec.xy[frame, target]))
+    if offset > p["xy"]:
+        return f"it is {cm(offset)} off {p['target']}'s centre (at most {cm(p['xy'])})"
+    gap = float(rec.bottom(source)[frame] - rec.top(target)[frame])
+    if gap < -p["clearance"] or gap > p["rest"]:
+        return f"it is not resting on {p['target']} ({cm(gap)} above its top)"
+    return None
+
+
+def _in_bowl(rec: Recording, p: dict, frame: int) -> str | None:
+    source, bowl = rec.index(p["object"]), rec.index(p["bowl"])
+    offset = float(np.linalg.norm(rec.xy[frame, source] - rec.xy[frame, bowl]))
+    rise = float(rec.z[frame, source] - rec.z[frame, bowl])
+    if offset > p["xy"] or rise > p["height"]:
+        return f"it is not in {p['bowl']} ({cm(offset)} from its axis, {cm(rise)} above it)"
+    return None
+
+
+def _turned(rec: Recording, p: dict, frame: int) -> str | None:
+    source = rec.index(p["object"])
+    angle = float(yaw(rec.trajectory.quaternions[frame, source]))
+    error = math.degrees(P.axis_error(angle, math.radians(p["yaw_deg"] or 0.0)))
+    if error > p["tolerance_deg"]:
+        return f"turned {error:.0f} deg off the asked yaw (at most {p['tolerance_deg']:.0f})"
+    return None
+
+
+def _aimed_at_label(rec: Recording, p: dict, frame: int) -> str | None:
+    return _aimed_at(("label",), "target")(rec, p, frame) or _turned(rec, p, frame)
+
+
+def _on_label(rec: Recording, p: dict, frame: int) -> str | None:
+    source, label = rec.index(p["object"]), rec.index(p["target"])
+    offset = np.abs(rec.xy[frame, source] - rec.xy[frame, label])
+    if np.any(offset > rec.half[label, :2]):
+        return f"its centre is off {p['target']}"
+    gap = float(rec.bottom(source)[frame] - rec.top(label)[frame])
+    if abs(gap) > p["rest"]:
+        return f"it is not resting on {p['target']} ({cm(gap)} above it)"
+    return _turned(rec, p, frame)
 
 
 def relative_placement(rec: Recording, node: dict, marks: dict) -> Outcome:
-    """Set down on the table in the asked relation to a landmark (cone and distance)."""
     p = node["intent"]["params"]
-    source, landmark = rec.index(p["object"]), rec.index(p["landmark"])
-    offset = rec.xy[:, source] - rec.xy[:, landmark]
-    related = P.in_cone(offset, DIRECTIONS.get(p["relation"]), p["range"], p["cone_deg"])
-    down = P.resting_on(rec.bottom(source), rec.scene.table_height, p["on_table"])
-    holds = related & down
-    where = f"{p['relation'].replace('_', ' ')} {p['landmark']} on the table"
-    return _placed(rec, node, marks, (holds, holds), where)
+    wanted = f"{p['relation'].replace('_', ' ')} {p['landmark']}"
+    return _placed(rec, node, marks, _towards, _in_relation, wanted)
 
 
 def stack(rec: Recording, node: dict, marks: dict) -> Outcome:
-    """Brought over the target (Intent), released resting on it (Execution)."""
-    intent, execution = node["intent"]["params"], node["execution"]["params"]
-    source, target = rec.index(intent["object"]), rec.index(intent["target"])
-    heights = rec.half[source, 2] + rec.half[target, 2]
-    a, b = rec.positions[:, source], rec.positions[:, target]
-    over = P.stacked(a, b, heights, intent["radius"], intent["clearance"])
-    on = P.stacked(a, b, heights, execution["xy"], execution["clearance"])
-    steady = a[:, 2] - b[:, 2] >= heights - execution["clearance"]
-    return _placed(rec, node, marks, (over, on), f"on {intent['target']}", steady)
+    return _placed(rec, node, marks, _aimed_at(None, "target"), _on,
+                   f"on {node['intent']['params']['target']}")
 
 
 def bowl(rec: Recording, node: dict, marks: dict) -> Outcome:
-    """Lowered into the bowl (Intent), released there and left in it (Execution)."""
-    p = node["intent"]["params"]
-    source, target = rec.index(p["object"]), rec.index(p["bowl"])
-    inside = P.in_bowl(rec.positions[:, source], rec.positions[:, target], p["xy"], p["height"])
-    return _placed(rec, node, marks, (inside, inside), f"in {p['bowl']}")
-
-
-def route(rec: Recording, node: dict, marks: dict) -> Outcome:
-    """While carried, the source crosses each waypoint's column over the right body: closer
-    to it than to the column's other bodies, and (for 'avoid X') never over X itself."""
-    p = node["intent"]["params"]
-    source = rec.index(p["object"])
-    lifted = rec.rise(source, marks["grasp"]) >= rec.profile.min_lift
-    lifted[:marks["grasp"]] = False
-    path = rec.xy[:, source]
-    start, crossed, met = rec.world(0), [], marks["grasp"]
-    for mode, body in p["waypoints"]:
-        step = Step(action="place", arm=None, source=p["object"], waypoints=((mode, body),))
-        rights = passes_over(step, start)
-        wrongs = [body] if mode == "avoid" else start.column_mates(body, (p["object"],))
-        for right in rights:
-            frame = _crossed(rec, path, lifted, right, wrongs, p)
-            if frame is None:
-                return Outcome(False, False, None, f"{p['object']} was not carried over {right}")
-            crossed.append(f"{right} at frame {frame}")
-            met = max(met, frame)
-        if mode == "avoid":
-            avoided = rec.index(body)
-            over = P.over_footprint(path, rec.xy[:, avoided], rec.half[avoided, :2]) & lifted
-            if over.any():
-                frame = int(np.flatnonzero(over)[0])
-                return Outcome(False, False, frame, f"{p['object']} passed over {body} at "
-                               f"frame {frame}")
-    marks["objective"] = met
-    avoided = [body for mode, body in p["waypoints"] if mode == "avoid"]
-    words = ([f"was carried over {', '.join(crossed)}"] if crossed else []) + \
-        ([f"never over {', '.join(avoided)}"] if avoided else [])
-    return Outcome(True, True, met, f"{p['object']} {' and '.join(words)}")
-
-
-def _crossed(rec: Recording, path: np.ndarray, lifted: np.ndarray, right: str,
-             wrongs: list[str], p: dict) -> int | None:
-    """The first frame the carried path crosses `right`'s column over it, not the others."""
-    c = rec.xy[0, rec.index(right)]
-    frames, ys = P.crossings(path, float(c[0]), p["x"])
-    keep = lifted[frames]
-    frames, ys = frames[keep], ys[keep]
-    gap = np.abs(ys - c[1])
-    ok = gap < p["y"]
-    for wrong in wrongs:
-        other = np.abs(ys - rec.xy[0, rec.index(wrong), 1])
-        ok &= (other > p["clear_y"]) & (gap < other)
-    return int(frames[ok][0]) if ok.any() else None
+    return _placed(rec, node, marks, _aimed_at(("bowl",), "bowl"), _in_bowl,
+                   f"in {node['intent']['params']['bowl']}")
 
 
 def orientation(rec: Recording, node: dict, marks: dict) -> Outcome:
-    """At the final frame the source rests on the target label, its centre within the label
-    edge, turned as asked (modulo 180 degrees; Intent and Execution differ in tolerance)."""
-    intent, execution = node["intent"]["params"], node["execution"]["params"]
-    source, target = rec.index(intent["object"]), rec.index(intent["target"])
-    end = rec.last
-    offset = float(np.linalg.norm(rec.xy[end, source] - rec.xy[end, target]))
-    down = abs(rec.bottom(source)[end] - rec.top(target)[end]) <= rec.profile.on_table_tolerance
-    if offset >= intent["edge"] or not down:
-        where = "not resting" if not down else f"{_cm(offset)} from its centre"
-        return Outcome(False, False, end, f"{intent['object']} ends {where} on {intent['target']}")
-    angle = float(yaw(rec.trajectory.quaternions[end, source]))
-    error = math.degrees(P.axis_error(angle, math.radians(intent["yaw_deg"] or 0.0)))
-    turned = f"{intent['object']} ends on {intent['target']}, {error:.0f} deg off the asked yaw"
-    return Outcome(error <= intent["tolerance_deg"], error <= execution["tolerance_deg"], end,
-                   turned)
+    return _placed(rec, node, marks, _aimed_at_label, _on_label,
+                   f"on {node['intent']['params']['target']}")
 
+
+# exact tests by execution predicate: what a final state must satisfy (completion reads them)
+AT_REST = {"rests_in_relation": _in_relation, "rests_on": _on, "rests_in": _in_bowl,
+           "rests_on_label": _on_label, "pushed_towards_at_rest": _pushed_far}
+
+
+# -- routes -----------------------------------------------------------------------------------
+
+def route(rec: Recording, node: dict, marks: dict) -> Outcome:
+    """While carried: for 'pass over W', Intent when the object crosses W's column on W's side
+    (nearer W than the column's other bodies, within `y` of it), Execution when its centre is
+    over W's footprint; for 'avoid X', Intent when it crosses X's column with its centre never
+    over X, Execution when its footprint never overlaps X's. Any altitude above the bodies."""
+    p = node["intent"]["params"]
+    source, arm = rec.index(p["object"]), arm_index(node["arm"])
+    since = marks.get("hold", marks["attempt"])
+    carried = (rec.holding(arm) == source) & (rec.rise(source, since) >= rec.profile.min_lift)
+    if not carried.any():
+        return Outcome(False, False, None, f"{p['object']} was never carried")
+    path, start = rec.xy[:, source], rec.world(0)
+    size = rec.footprint(source)
+    met, said, missed = marks["attempt"], [], []
+    for mode, body in p["waypoints"]:
+        b = rec.index(body)
+        frames, ys = P.crossings(path, float(rec.xy[0, b, 0]), p["x"])
+        keep = carried[frames]
+        frames, ys = frames[keep], ys[keep]
+        over = P.over_footprint(path, rec.xy[:, b], rec.half[b, :2]) & carried
+        if mode == "via":
+            gap = np.abs(ys - rec.xy[0, b, 1])
+            side = gap <= p["y"]
+            for mate in start.column_mates(body, (p["object"],)):
+                side &= gap < np.abs(ys - rec.xy[0, rec.index(mate), 1])
+            if not side.any():
+                return Outcome(False, False, None, f"{p['object']} did not cross {body}'s "
+                               f"column on its side")
+            met = max(met, int(frames[side][0]))
+            said.append(f"crossed {body}'s column at frame {int(frames[side][0])}")
+            if not over.any():
+                missed.append(f"its centre never passed over {body}")
+            continue
+        if over.any():
+            frame = int(np.flatnonzero(over)[0])
+            return Outcome(False, False, frame, f"{p['object']} passed over {body} at frame "
+                           f"{frame}")
+        if not len(frames):
+            return Outcome(False, False, None, f"{p['object']} was never carried past "
+                           f"{body}'s column")
+        met = max(met, int(frames[0]))
+        said.append(f"went round {body}")
+        touching = P.overlaps(path, size, rec.xy[:, b], rec.half[b, :2]) & carried
+        if touching.any():
+            missed.append(f"its footprint overlapped {body} at frame "
+                          f"{int(np.flatnonzero(touching)[0])}")
+    marks["objective"] = met
+    words = f"{p['object']} {' and '.join(said)}"
+    if missed:
+        return Outcome(True, False, met, f"{words}, but {'; '.join(missed)}")
+    return Outcome(True, True, met, words)
+
+
+# -- finishing --------------------------------------------------------------------------------
 
 def finish(rec: Recording, node: dict, marks: dict) -> Outcome:
-    """After the action: each working arm comes home within the deadline and stays (never
-    leaving again, never re-closing); each idle arm never closes and keeps out of the area."""
+    """After the action: each working arm back home and still within the deadline, staying
+    (never leaving, moving, grasping or closing at an object again); each handled object
+    still held (pickups) or where it came to rest; no other object moved, knocked over or
+    off the table (what pushes did is judged here, by its effect; a push's target may be
+    struck); the idle arm never
+    grasping or closing at an object, never in the work area. Every violation is named."""
     p = node["intent"]["params"]
-    done = marks.get("completion", 0)
-    working = list(dict.fromkeys(p["arms"]))
-    for name in working:
-        arm = arm_index(name)
-        home = rec.ee[0, arm]
-        arrived = P.first_stay(P.within(rec.ee[:, arm], home, p["home_radius"]), done,
-                               p["frames"])
-        if arrived is None:
-            return Outcome(False, False, None, f"the {name} arm did not come home and stay "
-                           f"(within {_cm(p['home_radius'])} for {p['frames']} frames)")
-        if arrived - done > p["deadline_frames"]:
-            return Outcome(False, False, arrived, f"the {name} arm came home {arrived - done} "
-                           f"frames after finishing (limit {p['deadline_frames']})")
-        away = np.linalg.norm(rec.ee[arrived:, arm] - home, axis=1)
-        if away.max() > p["leave_radius"]:
-            frame = arrived + int(np.argmax(away > p["leave_radius"]))
-            return Outcome(False, False, frame, f"the {name} arm left home again at frame "
-                           f"{frame} ({_cm(float(away.max()))} away)")
-        again = P.first(rec.closes(arm, p["close"]), done + 1)
-        if again is not None:
-            return Outcome(False, False, again, f"the {name} arm closed its gripper again at "
-                           f"frame {again}")
-    for name in (a for a in ARMS if a not in working):
-        arm = arm_index(name)
-        closed = P.first(rec.closes(arm, p["close"]))
-        if closed is not None:
-            return Outcome(False, False, closed, f"the idle {name} arm closed its gripper at "
-                           f"frame {closed}")
-        entered = P.first_true(P.inside_box(rec.ee[:, arm], p["operation_area"]))
-        if entered is not None:
-            return Outcome(False, False, entered, f"the idle {name} arm entered the work area "
-                           f"at frame {entered}")
-    return Outcome(True, True, done, "back home and still" if working else "stayed still")
+    done, rests = marks.get("completion", 0), dict(marks.get("rests", ()))
+    problems = []
+    for name in dict.fromkeys(p["arms"]):
+        problems += _home_and_still(rec, arm_index(name), name, done, p)
+    handled = set()
+    for body_name, keep, arm_name in p["keep"]:
+        body = rec.index(body_name)
+        handled.add(body)
+        problems += _kept(rec, body, keep, arm_index(arm_name), rests.get(body_name), p)
+    problems += _disturbed(rec, handled | {rec.index(b) for b in p["struck"]}, p)
+    for name in (a for a in ARMS if a not in p["arms"]):
+        problems += _idle(rec, arm_index(name), name, p)
+    if problems:
+        return Outcome(False, False, done, "; ".join(problems))
+    return Outcome(True, True, done, "back home and still, nothing else disturbed"
+                   if p["arms"] else "stayed still, nothing disturbed")
 
 
-EVALUATORS = {"nearest_at_first_close": grasp, "push_contact": push_contact,
-              "pushed_towards": pushed_towards, "set_down_in_relation": relative_placement,
-              "held_above": stack, "lowered_into": bowl, "carried_over": route,
-              "final_placement": orientation, "finished": finish}
+def _home_and_still(rec: Recording, arm: int, name: str, done: int, p: dict) -> list[str]:
+    ee, home = rec.ee[:, arm], rec.ee[0, arm]
+    away = np.linalg.norm(ee - home, axis=1)
+    still = P.steady(ee, p["frames"], p["still_radius"])
+    settled = P.holds_for(away <= p["home_radius"], p["frames"]) & still
+    arrived = P.first_true(settled, done)
+    if arrived is None:
+        return [f"the {name} arm did not come home and keep still (within "
+                f"{cm(p['home_radius'])} of home, moving less than {cm(p['still_radius'])} "
+                f"over {p['frames']} frames)"]
+    problems = []
+    if arrived - done > p["deadline_frames"]:
+        problems.append(f"the {name} arm came home {arrived - done} frames after finishing "
+                        f"(limit {p['deadline_frames']})")
+    left = P.first_true(away > p["leave_radius"], arrived)
+    moved = P.first_true(~still, arrived)
+    if left is not None:
+        problems.append(f"the {name} arm left home again at frame {left} "
+                        f"({cm(float(away[arrived:].max()))} away)")
+    elif moved is not None:
+        problems.append(f"the {name} arm moved again at home from frame {moved}")
+    again = rec.first_attempt(arm, done + 1, ("grasp", "close"))
+    closes = rec.closes(arm)
+    shut = closes[closes > done]
+    if again is not None:
+        problems.append(f"the {name} arm {again.words(rec.bodies)} after finishing")
+    elif len(shut):
+        problems.append(f"the {name} arm closed its gripper again at frame {int(shut[0])}")
+    return problems
+
+
+def _kept(rec: Recording, body: int, keep: str, arm: int, rest: int | None,
+          p: dict) -> list[str]:
+    name = rec.bodies[body]
+    if keep == "held":
+        held = rec.holding(arm) == body
+        if held[-1]:
+            return []
+        taken = P.first_true(held)
+        if taken is None:
+            return [f"{name} was never held by the {ARMS[arm]} arm"]
+        return [f"{name} was let go of at frame {P.first_true(~held, taken)}"]
+    if rest is None:
+        return [f"{name} was never let go of"]
+    moved = np.linalg.norm(rec.positions[rest:, body] - rec.positions[rest, body], axis=1)
+    if moved.max() > p["stay"]:
+        frame = rest + int(np.argmax(moved > p["stay"]))
+        return [f"{name} moved {cm(float(moved.max()))} from where it came to rest (from "
+                f"frame {frame})"]
+    return []
+
+
+def _disturbed(rec: Recording, handled: set[int], p: dict) -> list[str]:
+    problems = []
+    table = rec.scene.table_height
+    for body in rec.movable:
+        if body in handled:
+            continue
+        name = rec.bodies[body]
+        holder = next((ARMS[a] for a in range(2) if rec.holding(a)[-1] == body), None)
+        moved = float(np.linalg.norm(rec.positions[-1, body] - rec.positions[0, body]))
+        if holder is not None:
+            problems.append(f"{name} is held by the {holder} arm")
+        elif rec.z[-1, body] < table:
+            problems.append(f"{name} fell off the table")
+        elif rec.tilt_deg(body) > p["topple_deg"]:
+            problems.append(f"{name} was knocked over")
+        elif moved > p["disturb"]:
+            problems.append(f"{name} was moved {cm(moved)}")
+    return problems
+
+
+def _idle(rec: Recording, arm: int, name: str, p: dict) -> list[str]:
+    problems = []
+    attempt = rec.first_attempt(arm, kinds=("grasp", "close"))
+    if attempt is not None:
+        problems.append(f"the idle {name} arm {attempt.words(rec.bodies)}")
+    entered = P.first_true(P.inside_box(rec.ee[:, arm], p["operation_area"]))
+    if entered is not None:
+        problems.append(f"the idle {name} arm entered the work area at frame {entered}")
+    return problems
+
+
+EVALUATORS = {"went_for": went_for, "first_pushed": push_contact,
+              "pushed_towards": pushed_towards, "delivered_towards": relative_placement,
+              "delivered_onto": stack, "delivered_into": bowl, "route_sides": route,
+              "delivered_to_label": orientation, "finished": finish}

@@ -8,7 +8,8 @@ Observation: {"images": {cam_high, cam_left_wrist, cam_right_wrist} (H, W, 3) ui
 "state": 14-D joints (grippers normalised, 1 open), "instruction": the episode's text}.
 The episode fixes layout, instruction and jitter seed; `reset(seed=...)` overrides the seed.
 Reward is always 0 and nothing terminates early: the oracle scores the recorded trajectory
-(`env.trajectory()`), as the benchmark's protocol runs a fixed action budget.
+(`env.trajectory()`), as the benchmark's protocol runs a fixed action budget. Targets past a
+joint limit are clipped to it; `info["clipped"]` counts the actions that had one.
 """
 
 from __future__ import annotations
@@ -56,7 +57,7 @@ class RoboFollowEnv(gym.Env):
         self.stage = Stage(width, height)  # the current layout's simulation and cameras
         self.recorder: Recorder | None = None
         self.episode: dict = self.default_episode
-        self.steps = 0
+        self.steps = self.clipped = 0  # clipped: actions with a target past a joint limit
         self.command = robot.home_state()
 
     def _episode(self, episode: str | dict) -> dict:
@@ -70,7 +71,7 @@ class RoboFollowEnv(gym.Env):
         self.stage.simulation(scene, self.episode["layout"], render=True)
         jitter_seed = self.episode["seed"] if seed is None else seed
         self.sim.reset(jitter_seed)
-        self.steps, self.command = 0, robot.home_state()
+        self.steps, self.clipped, self.command = 0, 0, robot.home_state()
         self.recorder = Recorder(self.sim, {"episode": self.episode["episode"],
                                             "scene": scene.id, "layout": self.episode["layout"],
                                             "seed": jitter_seed})
@@ -83,7 +84,8 @@ class RoboFollowEnv(gym.Env):
         action = np.asarray(action, dtype=np.float64).reshape(-1)
         if action.shape != (14,) or not np.all(np.isfinite(action)):
             raise ValueError(f"an action is 14 finite joint targets, got shape {action.shape}")
-        self.command = np.clip(action, robot.ACTION_LOW, robot.ACTION_HIGH)
+        self.command, past = robot.clip_to_limits(action)
+        self.clipped += int(past)
         self.sim.step(self.command)
         self.steps += 1
         self.recorder.frame(self.command)
@@ -97,7 +99,8 @@ class RoboFollowEnv(gym.Env):
     def _info(self) -> dict:
         return {"episode": self.episode["episode"], "scene": self.episode["scene"],
                 "level": self.episode["level"], "layout": self.episode["layout"],
-                "seed": self.recorder.meta["seed"], "step": self.steps}
+                "seed": self.recorder.meta["seed"], "step": self.steps,
+                "clipped": self.clipped}
 
     def trajectory(self) -> Trajectory:
         """The episode so far, one frame per control step (frame 0 = the settled start)."""

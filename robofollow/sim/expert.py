@@ -72,11 +72,12 @@ class Expert:
         self.iks = [ArmIK(sim.model, sim.arm_qpos[a], sim.arm_dof[a], sim.tcp_sites[a])
                     for a in range(2)]
 
-    def actions(self, plan: Plan) -> np.ndarray:
-        """The [T, 14] joint targets executing `plan` from home, ending with a short hold
-        (float32 values)."""
-        command = robot.home_state()
-        at_home = [True, True]
+    def actions(self, plan: Plan, start: np.ndarray | None = None,
+                hold: int = FINAL_STEPS) -> np.ndarray:
+        """The [T, 14] joint targets executing `plan` from the command `start` (default: home,
+        grippers open), ending with `hold` steps holding the last target (float32 values)."""
+        command = robot.home_state() if start is None else np.array(start, dtype=float)
+        at_home = [bool(np.allclose(command[7 * a:7 * a + 6], robot.HOME)) for a in range(2)]
         actions: list[np.ndarray] = []
         for point in plan.points:
             arm = robot.ARMS.index(point.arm)
@@ -100,7 +101,7 @@ class Expert:
                     command[7 * arm + 6] = g
                     actions.append(command.copy())
             actions += [command.copy()] * DWELL_STEPS
-        actions += [command.copy()] * FINAL_STEPS
+        actions += [command.copy()] * hold
         # float32 targets, as a policy sends them: a recorded demonstration's (float32)
         # actions replay to exactly the same trajectory
         return np.array(actions, dtype=np.float32).astype(np.float64)

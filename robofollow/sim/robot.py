@@ -35,6 +35,13 @@ def home_state() -> np.ndarray:
     return np.concatenate([arm, arm])
 
 
+def clip_to_limits(actions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Joint targets (14,) or (T, 14) clipped to the joint limits, and which of them (one
+    bool per action) had a target past a limit."""
+    clipped = np.clip(actions, ACTION_LOW, ACTION_HIGH)
+    return clipped, np.any(clipped != actions, axis=-1)
+
+
 def observed_state(state: np.ndarray) -> np.ndarray:
     """The 14-D state as a policy observes it (env and datasets): within the joint limits,
     float32. Works on one state or a (T, 14) array."""
