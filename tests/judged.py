@@ -15,8 +15,8 @@ import numpy as np
 
 from robofollow.compiler.behaviour import Behaviour, Step
 from robofollow.compiler.plans import (CLOSED, LIFT, OPEN, PRE_GRASP, PRE_PLACE, PUSH_HEIGHT,
-                                       RETREAT, STACK_CLEARANCE, TABLE_CLEARANCE, PlanPoint, Plan,
-                                       plan)
+                                       PUSH_SPEED, RETREAT, STACK_CLEARANCE, TABLE_CLEARANCE,
+                                       PlanPoint, Plan, plan, push_points)
 from robofollow.oracle.results import EpisodeScore
 from robofollow.scoring import score_recording
 from robofollow.sim import robot
@@ -126,13 +126,19 @@ class Script:
         return self.move(arm, position, OPEN).grip(arm, CLOSED).grip(arm, OPEN)
 
     def sweep(self, arm: str, y: float, x_from: float, x_to: float) -> "Script":
-        """The closed gripper lowered to push height at one end of a row and dragged to the
-        other end, pushing whatever stands in the way; then home."""
+        """The closed gripper lowered to push height at one end of a row and moved to the
+        other end at the planner's pushing speed, pushing whatever stands in the way; home."""
         z = self.world.table + PUSH_HEIGHT
         yaw = -90.0  # the closed fingers' wide face across the row, as the push planner turns it
-        return (self.move(arm, (x_from, y, z + LIFT), OPEN, yaw).grip(arm, CLOSED)
-                .move(arm, (x_from, y, z), yaw=yaw).move(arm, (x_to, y, z), yaw=yaw)
-                .move(arm, (x_to, y, z + LIFT), yaw=yaw).home(arm))
+        self.move(arm, (x_from, y, z + LIFT), OPEN, yaw).grip(arm, CLOSED)
+        self.move(arm, (x_from, y, z), yaw=yaw)
+        self.points([PlanPoint(name="sweep", arm=arm, position=(x_to, y, z), gripper=CLOSED,
+                               yaw_degrees=yaw, speed=PUSH_SPEED)])
+        return self.move(arm, (x_to, y, z + LIFT), yaw=yaw).home(arm)
+
+    def push(self, arm: str, body: str, direction: tuple[float, float]) -> "Script":
+        """The planner's push of `body` along a planar direction."""
+        return self.points(push_points(self.world, arm, body, direction))
 
     def shake(self, arm: str, amplitude: float, times: int) -> "Script":
         """Wave the gripper side to side around where it is (the arm's home, say)."""

@@ -288,9 +288,12 @@ CASES = [
     Case("s2 L2: stacked on the wrong target", S2_L2_STACK,
          lambda s: s.perform(s.variant(target="large_red_cylinder")), exactly(0.4),
          exactly(0.4), False, "a novel wording understood for the object, not the target"),
-    Case("s2 L3: pushed the right cube the training way (towards the old spot)", S2_L3_PUSH,
-         lambda s: s.perform(s.variant(target="small_blue_cylinder")), exactly(0.4),
-         exactly(0.4), False, "the target moved; pushing towards where it was is another way"),
+    Case("s2 L3: pushed the right cube sideways, not towards the moved target", S2_L3_PUSH,
+         lambda s: s.push("left", "large_blue_cube", (1.0, 0.0)), exactly(0.4), exactly(0.4),
+         False, "right object, a direction 90 deg off the asked one"),
+    Case("s2 L3: pushing the training way comes down on the moved target first", S2_L3_PUSH,
+         lambda s: s.push("left", "large_blue_cube", (0.0, 1.0)), NOTHING, NOTHING, False,
+         "behind the cube now stands the cylinder: the first object pushed is the wrong one"),
 
     # -- Scene 3: routes and orientation ------------------------------------------------------
     Case("s3 analog gripper", S3_VIA, lambda s: s.perform().edit(analog), FULL, FULL, True,
@@ -313,6 +316,12 @@ CASES = [
          lambda s: carried_round(s, "left", "blue_slab", [(-0.04, 0.0), (-0.14, 0.0)],
                                  "green_label", 90.0), FULL, FULL, True,
          "never over the red slab: the constraint as worded"),
+    Case("s3 'avoid red': crosses beside red, but cuts over its corner first", S3_AVOID,
+         lambda s: carried_round(s, "left", "blue_slab", [
+             (s.at("red_slab")[0] + 0.014, s.at("red_slab")[1] + 0.012),
+             (s.at("red_slab")[0], s.at("green_slab")[1] + 0.04)], "green_label", 90.0),
+         FULL, exactly(0.24), False,
+         "chose to go round (Intent), but its centre passed over red (Execution)"),
     Case("s3 'avoid red': carried over red", S3_AVOID,
          lambda s: s.perform(s.variant(waypoints=(("via", "red_slab"),))), exactly(0.24),
          exactly(0.24), False, "the route it was told to avoid"),

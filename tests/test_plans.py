@@ -6,7 +6,8 @@ from pathlib import Path
 import pytest
 
 from robofollow.compiler.behaviour import Behaviour, Step
-from robofollow.compiler.plans import PLACE_GAP, PUSH_DISTANCE, plan
+from robofollow.compiler.plans import (PLACE_GAP, PUSH_FACE, PUSH_RUN_UP, PUSH_SPEED,
+                                       PUSH_TRAVEL, plan)
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.training import check_training
 from robofollow.compiler.world import World
@@ -84,7 +85,10 @@ def test_push_starts_behind_the_object_and_moves_towards_the_target(setup):
     end = next(p for p in result.points if p.name == "push_end").position
     source, target = world.poses["large_blue_cube"], world.poses["large_red_cylinder"]
     assert start[1] < source.y < target.y
-    assert end[1] - start[1] == pytest.approx(PUSH_DISTANCE)
+    touch = world.bodies["large_blue_cube"].half_extents[1] + PUSH_FACE  # the cube's face
+    assert source.y - start[1] == pytest.approx(touch + PUSH_RUN_UP)
+    assert end[1] - (source.y - touch) == pytest.approx(PUSH_TRAVEL)  # fingers past touching
+    assert next(p for p in result.points if p.name == "push_end").speed == PUSH_SPEED
 
 
 def test_a_relative_placement_avoids_a_taken_spot(setup):

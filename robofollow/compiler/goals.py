@@ -97,8 +97,8 @@ class _Builder:
 
     def finish(self, weight: float, steps: list[Step]) -> None:
         """Back home and still; each handled object held (pickups) or left where it came to
-        rest; nothing else disturbed (a push's target may be struck); the idle arm out of the
-        work area."""
+        rest; nothing else disturbed (a push's target may be struck, within its own tolerance);
+        the idle arm out of the work area."""
         p = self.p
         keep = [[step.source, _KEEP[step.action], step.arm] for step in steps]
         struck = [step.target for step in steps if step.action == "push"]  # may be hit
@@ -106,7 +106,8 @@ class _Builder:
                       home_radius=p.home_radius, frames=p.home_frames,
                       still_radius=p.still_radius, deadline_frames=p.home_deadline_frames,
                       leave_radius=p.leave_home_radius, stay=p.stay_tolerance,
-                      disturb=p.disturb_tolerance, topple_deg=p.topple_deg,
+                      disturb=p.disturb_tolerance, struck_tolerance=p.struck_tolerance,
+                      topple_deg=p.topple_deg,
                       operation_area=[list(a) for a in p.operation_area])
         self.add("finish", "finish", weight, None, _predicate("finished", **params),
                  _predicate("finished", **params))

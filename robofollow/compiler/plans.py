@@ -30,9 +30,10 @@ PLACE_SHIFTS = ((0.0, 0.0), (0.015, 0.0), (0.0, 0.02), (0.0, -0.02), (0.03, 0.0)
 STACK_CLEARANCE = 0.005  # m: release height above the support's top
 TABLE_CLEARANCE = 0.001  # m: release height above the table
 ROUTE_CLEARANCE = 0.09  # m: carried object's bottom above the highest body on the route
-PUSH_CONTACT = 0.015  # m: gap between fingertips and the pushed object's side
-PUSH_RUN_UP = 0.02  # m: start this much further back
-PUSH_DISTANCE = 0.065  # m: how far the fingers travel while pushing (about 3 cm past contact)
+PUSH_FACE = 0.012  # m: the closed fingers' half-depth along the push (their face to centre)
+PUSH_RUN_UP = 0.035  # m: start this far back from touching the object
+PUSH_TRAVEL = 0.03  # m: how far the fingers carry the object past first touching it
+PUSH_SPEED = 0.05  # m/s: slow enough that the object moves with the fingers, stops with them
 PUSH_BACK_OFF = 0.03  # m: back off after pushing
 PUSH_HEIGHT = 0.02  # m: fingertip height above the table while pushing
 OPEN, CLOSED = 1.0, 0.0
@@ -44,6 +45,7 @@ class PlanPoint(Model):
     position: tuple[float, float, float] | None  # None for `home`
     yaw_degrees: float = 0.0  # gripper rotation about z from its top-down grasp
     gripper: float  # target opening at this point: 1 open, 0 closed
+    speed: float | None = None  # m/s: how fast to come here (None: the executor's own)
 
 
 class Plan(Model):
@@ -62,11 +64,12 @@ class _Planner:
         self.world = world
         self.points: list[PlanPoint] = []
 
-    def add(self, name: str, arm: str, position, gripper: float, yaw: float = 0.0) -> None:
+    def add(self, name: str, arm: str, position, gripper: float, yaw: float = 0.0,
+            speed: float | None = None) -> None:
         if position is not None:
             position = tuple(round(v, 6) for v in position)
         self.points.append(PlanPoint(name=name, arm=arm, position=position, gripper=gripper,
-                                     yaw_degrees=yaw))
+                                     yaw_degrees=yaw, speed=speed))
 
     def grasp_point(self, body: str) -> tuple[float, float, float]:
         pose = self.world.poses[body]
@@ -134,27 +137,37 @@ class _Planner:
         self.add("home", step.arm, None, OPEN)
 
     def push(self, step: Step) -> None:
-        world = self.world
-        source, target = world.poses[step.source], world.poses[step.target]
-        dx, dy = target.x - source.x, target.y - source.y
-        length = math.hypot(dx, dy) or 1.0
-        ux, uy = dx / length, dy / length
-        half = world.bodies[step.source].half_extents
-        radius = half[0] * (math.sqrt(2) if world.bodies[step.source].kind == "cube" else 1.0)
-        back = radius + PUSH_CONTACT + PUSH_RUN_UP
-        z = world.table + PUSH_HEIGHT
-        start = (source.x - ux * back, source.y - uy * back, z)
-        end = (start[0] + ux * PUSH_DISTANCE, start[1] + uy * PUSH_DISTANCE, z)
-        # the closed fingers' wide face (normal along the gripper's z axis) meets the object
-        yaw = (math.degrees(math.atan2(uy, ux)) + 90.0 + 90.0) % 180.0 - 90.0
-        self.add("pre_push", step.arm, _up(start, LIFT), OPEN, yaw)
-        self.add("close", step.arm, _up(start, LIFT), CLOSED, yaw)
-        self.add("push_start", step.arm, start, CLOSED, yaw)
-        self.add("push_end", step.arm, end, CLOSED, yaw)
-        backed = (end[0] - ux * PUSH_BACK_OFF, end[1] - uy * PUSH_BACK_OFF, z)
-        self.add("back_off", step.arm, backed, CLOSED, yaw)
-        self.add("lift", step.arm, _up(backed, LIFT), CLOSED, yaw)
-        self.add("home", step.arm, None, CLOSED)
+        source, target = self.world.poses[step.source], self.world.poses[step.target]
+        self.points += push_points(self.world, step.arm, step.source,
+                                   (target.x - source.x, target.y - source.y))
+
+
+def push_points(world: World, arm: str, body: str,
+                direction: tuple[float, float]) -> list[PlanPoint]:
+    """Pushing `body` along a planar direction: close the gripper above a run-up, lower it
+    behind the body, carry the body PUSH_TRAVEL past first touching it at PUSH_SPEED, back
+    off, lift, go home (gripper closed)."""
+    planner = _Planner(world)
+    length = math.hypot(*direction) or 1.0
+    ux, uy = direction[0] / length, direction[1] / length
+    pose, half = world.poses[body], world.bodies[body].half_extents
+    round_ = world.bodies[body].kind in ("sphere", "cylinder")
+    extent = half[0] if round_ else abs(ux) * half[0] + abs(uy) * half[1]  # centre to face
+    touch = extent + PUSH_FACE  # grasp centre to object centre when the fingers touch it
+    z = world.table + PUSH_HEIGHT
+    start = (pose.x - ux * (touch + PUSH_RUN_UP), pose.y - uy * (touch + PUSH_RUN_UP), z)
+    end = (pose.x - ux * (touch - PUSH_TRAVEL), pose.y - uy * (touch - PUSH_TRAVEL), z)
+    # the closed fingers' wide face (normal along the gripper's z axis) meets the object
+    yaw = (math.degrees(math.atan2(uy, ux)) + 90.0 + 90.0) % 180.0 - 90.0
+    planner.add("pre_push", arm, _up(start, LIFT), OPEN, yaw)
+    planner.add("close", arm, _up(start, LIFT), CLOSED, yaw)
+    planner.add("push_start", arm, start, CLOSED, yaw)
+    planner.add("push_end", arm, end, CLOSED, yaw, speed=PUSH_SPEED)
+    backed = (end[0] - ux * PUSH_BACK_OFF, end[1] - uy * PUSH_BACK_OFF, z)
+    planner.add("back_off", arm, backed, CLOSED, yaw)
+    planner.add("lift", arm, _up(backed, LIFT), CLOSED, yaw)
+    planner.add("home", arm, None, CLOSED)
+    return planner.points
 
 
 def plan(behaviour: Behaviour, world: World) -> Plan:

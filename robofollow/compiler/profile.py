@@ -29,9 +29,15 @@ class ScoringProfile(Model):
     pickup_complete: float = 0.8  # a pickup is complete with final IS and ES at least this
     # grasps, read from physics (finger contacts, the measured opening), never the command
     grasp_frames: int = 2  # both fingers on a body this many frames in a row: a grasp
-    held_opening: float = 0.1  # measured opening above which something is between the fingers
+    gripper_span: float = 0.075  # m: the fingers' gap at measured opening 1 (the robot's)
+    grip_slack: float = 0.01  # m: a held body is between the fingers: their gap is at least
+    #                           its narrowest width less this
+    grasp_closing: float = 0.05  # the fingers closed at least this much onto it (opening)
+    grasp_window: int = 15  # frames before a grasp in which they were that much wider apart
     grasp_gap: int = 2  # frames a grasp may flicker off and still be the same grasp
-    close_threshold: float = 0.35  # measured opening (1 open, 0 closed): closed in free air
+    close_threshold: float = 0.35  # measured opening (1 open, 0 closed): shut in free air
+    open_threshold: float = 0.7  # measured opening: open (a close goes from open to shut)
+    open_frames: int = 5  # frames in a row the fingers stay open to be open (not prised)
     push_close_threshold: float = 0.25  # measured opening: the gripper is closed to push
     reach_radius: float = 0.06  # m: closing this near a body's centre (3-D) goes for it
     support_xy: float = 0.02  # m: a body this close (xy) below another supports it
@@ -70,6 +76,7 @@ class ScoringProfile(Model):
     leave_home_radius: float = 0.14  # m: moving this far from home again fails the finish
     stay_tolerance: float = 0.01  # m: a placed (or pushed) object moves at most this after
     disturb_tolerance: float = 0.02  # m: another object moves at most this in the episode
+    struck_tolerance: float = 0.03  # m: a push's target, which the pushed object may strike
     topple_deg: float = 45.0  # deg: or tilts at most this (spheres excepted)
     operation_area: tuple[tuple[float, float], tuple[float, float], tuple[float, float]] = (
         (-0.20, 0.15), (-0.15, 0.15), (0.74, 1.0))  # m: x, y, z box the idle arm stays out of

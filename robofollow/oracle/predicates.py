@@ -42,8 +42,8 @@ def steady(points: np.ndarray, frames: int, radius: float) -> np.ndarray:
         return np.zeros(0, dtype=bool)
     padded = np.concatenate([points, np.repeat(points[-1:], frames - 1, axis=0)])
     windows = np.lib.stride_tricks.sliding_window_view(padded, frames, axis=0)  # (T, D, F)
-    spread = np.linalg.norm(windows - points[:, :, None], axis=1).max(axis=1)
-    return spread <= radius
+    offsets = windows - points[:, :, None]
+    return np.einsum("tdf,tdf->tf", offsets, offsets).max(axis=1) <= radius * radius
 
 
 def in_cone(offset: np.ndarray, direction: tuple[float, float], cone_deg: float) -> np.ndarray:
@@ -75,25 +75,10 @@ def crossings(path: np.ndarray, x: float, near: float) -> tuple[np.ndarray, np.n
     return frames[order], ys[order]
 
 
-def footprint(half: np.ndarray, yaw: np.ndarray, round_: bool) -> np.ndarray:
-    """(T, 2) half extents in x and y of a body's footprint turned by `yaw` (T,): the
-    bounding box of the turned rectangle, or the circle's for a round body."""
-    if round_:
-        return np.broadcast_to(half[:2], (len(yaw), 2))
-    c, s = np.abs(np.cos(yaw)), np.abs(np.sin(yaw))
-    return np.stack([c * half[0] + s * half[1], s * half[0] + c * half[1]], axis=1)
-
-
 def over_footprint(path: np.ndarray, centre: np.ndarray, half: np.ndarray) -> np.ndarray:
     """(T,) whether points of a planar path (T, 2) lie over a footprint (centre (T, 2), half
     extents (2,) or (T, 2))."""
     return np.all(np.abs(path - centre) <= half, axis=-1)
-
-
-def overlaps(centre_a: np.ndarray, half_a: np.ndarray, centre_b: np.ndarray,
-             half_b: np.ndarray) -> np.ndarray:
-    """(T,) whether two footprints (centres (T, 2), half extents) overlap."""
-    return np.all(np.abs(centre_a - centre_b) < half_a + half_b, axis=-1)
 
 
 def axis_error(angle: float, target: float) -> float:

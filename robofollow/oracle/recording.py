@@ -3,13 +3,16 @@ the stages are judged on, each computed once per recording.
 
 Every event is read from simulated physics, never from the commanded gripper value:
 
-- a **hold** is both fingers of one arm on one movable body (the recorder's `grasped`), with
-  the measured opening above `held_opening` (the body between the fingers, not pushed by the
-  shut fingertips), for `grasp_frames` frames in a row; it ends (a **release**) when they no
-  longer are;
-- a **close** is the measured opening falling to `close_threshold` while the arm holds nothing
-  (fingers shut in free air); it goes for the body whose centre is within `reach_radius` (3-D)
-  of the grasp centre, if any;
+- a **hold** is both fingers of one arm on one movable body (the recorder's `grasped`) with
+  the body between them (their measured gap, opening x `gripper_span`, at least its narrowest
+  width less `grip_slack`: shut fingertips pressed on a body hold nothing), for
+  `grasp_frames` frames in a row, the fingers having closed onto it (in the `grasp_window`
+  frames before, they were `grasp_closing` wider apart: a body wedged against shut fingers
+  prises them open instead); it ends (a **release**) when they no longer hold it;
+- a **close** is the measured opening going from open (`open_threshold`, for `open_frames` in
+  a row: not fingers prised open for an instant) to shut (`close_threshold`) while the arm
+  holds nothing (fingers shut in free air); it goes for the body whose centre is within
+  `reach_radius` (3-D) of the grasp centre, if any;
 - a **push** is a body starting to move (`push_moved` from where it stood) while an arm's
   gripper, or the body that arm holds, touches it (or the grasp centre is within
   `push_contact_radius`, 3-D, in the `push_contact_frames` before);
@@ -27,10 +30,9 @@ from robofollow.compiler.profile import ScoringProfile
 from robofollow.compiler.spec import Scene
 from robofollow.compiler.world import World
 from robofollow.oracle import predicates as P
-from robofollow.trajectory import ARMS, Trajectory, TrajectoryError, tilt, yaw
+from robofollow.trajectory import ARMS, Trajectory, TrajectoryError, tilt
 
 GRIPPERS = ("left_gripper", "right_gripper")  # contact names of the two grippers
-ROUND = ("sphere", "cylinder", "bowl")  # footprints that do not change as the body turns
 AttemptKind = Literal["grasp", "close", "push"]
 ATTEMPT_WORDS = {"grasp": "grasped", "close": "closed its fingers at", "push": "pushed"}
 
@@ -81,7 +83,9 @@ class Recording:
         self.movable = np.flatnonzero(~fixture)
         self.spheres = np.array([scene.bodies[b].kind == "sphere" for b in self.bodies])
         held = np.asarray(trajectory.grasped, dtype=int)
-        between = self.opening > profile.held_opening  # shut fingertips hold nothing
+        narrowest = 2 * self.half[:, :2].min(axis=1)  # (B,) m
+        gap = self.opening * profile.gripper_span  # (T, 2) m
+        between = gap >= narrowest[np.maximum(held, 0)] - profile.grip_slack
         self.held = np.where((held >= 0) & ~fixture[np.maximum(held, 0)] & between, held, -1)
         self.last = len(trajectory) - 1
         self.memo: dict = {}  # per-recording results: events, settling, stage outcomes
@@ -115,8 +119,11 @@ class Recording:
                 runs[-1][2] = int(end)
             else:
                 runs.append([body, int(start), int(end)])
+        opening = self.opening[:, arm]
         return tuple(Hold(arm, body, start, None if end == len(held) else end)
-                     for body, start, end in runs if end - start >= p.grasp_frames)
+                     for body, start, end in runs if end - start >= p.grasp_frames and
+                     opening[max(0, start - p.grasp_window):start + 1].max()
+                     >= opening[start] + p.grasp_closing)
 
     def holding(self, arm: int) -> np.ndarray:
         """(T,) the body the arm holds at each frame (merged holds), or -1."""
@@ -128,11 +135,16 @@ class Recording:
         return self.cached(("holding", arm), compute)
 
     def closes(self, arm: int) -> np.ndarray:
-        """Frames where the arm's fingers shut in free air (the measured opening falls to the
-        close threshold while it holds nothing)."""
+        """Frames where the arm's fingers shut in free air: the measured opening falls to the
+        close threshold, having been open (for `open_frames` in a row) since the previous such
+        fall, while it holds nothing."""
         def compute() -> np.ndarray:
-            frames = P.falls(self.opening[:, arm], self.profile.close_threshold)
-            return frames[self.holding(arm)[frames] < 0]
+            p, opening = self.profile, self.opening[:, arm]
+            frames = P.falls(opening, p.close_threshold)
+            opened = np.flatnonzero(P.holds_for(opening >= p.open_threshold, p.open_frames))
+            since = np.searchsorted(opened, frames) > np.searchsorted(
+                opened, np.concatenate(([-1], frames[:-1])), side="right")  # open in between
+            return frames[since & (self.holding(arm)[frames] < 0)]
         return self.cached(("closes", arm), compute)
 
     # -- pushes ----------------------------------------------------------------------------
@@ -239,12 +251,6 @@ class Recording:
         surface = np.where(below, tops, -np.inf).max(axis=1)
         return self.bottom(body)[frames] - np.maximum(surface, self.scene.table_height)
 
-    def footprint(self, body: int) -> np.ndarray:
-        """(T, 2) half extents in x and y of the body's footprint as it turns."""
-        kind = self.scene.bodies[self.bodies[body]].kind
-        return P.footprint(self.half[body], yaw(self.trajectory.quaternions[:, body]),
-                           kind in ROUND)
-
     def support_of(self, body: int, frame: int) -> int | None:
         """The body directly under `body` at this frame, if it rests on one."""
         p = self.profile
@@ -258,7 +264,14 @@ class Recording:
         if self.spheres[body]:
             return 0.0
         q = self.trajectory.quaternions
-        return float(np.degrees(tilt(q[0, body], q[-1, body])))
+        return self.cached(("tilt", body),
+                           lambda: float(np.degrees(tilt(q[0, body], q[-1, body]))))
+
+    def still(self, arm: int, frames: int, radius: float) -> np.ndarray:
+        """(T,) whether the arm's grasp centre moves within `radius` over the next `frames`
+        frames from each frame."""
+        return self.cached(("still", arm, frames, radius),
+                           lambda: P.steady(self.ee[:, arm], frames, radius))
 
     def rise(self, body: int, since: int) -> np.ndarray:
         """(T,) height of a body above where it was at frame `since` (m)."""

@@ -339,10 +339,11 @@ AT_REST = {"rests_in_relation": _in_relation, "rests_on": _on, "rests_in": _in_b
 # -- routes -----------------------------------------------------------------------------------
 
 def route(rec: Recording, node: dict, marks: dict) -> Outcome:
-    """While carried: for 'pass over W', Intent when the object crosses W's column on W's side
-    (nearer W than the column's other bodies, within `y` of it), Execution when its centre is
-    over W's footprint; for 'avoid X', Intent when it crosses X's column with its centre never
-    over X, Execution when its footprint never overlaps X's. Any altitude above the bodies."""
+    """While carried, the object is over a body when its centre is over that body's
+    footprint (at any altitude). 'Pass over W': Intent when it crosses W's column on W's side
+    (nearer W than the column's other bodies, within `y` of it), Execution when it is over W.
+    'Avoid X': Intent when it crosses X's column beside X (not over it there), Execution when
+    it is never over X."""
     p = node["intent"]["params"]
     source, arm = rec.index(p["object"]), arm_index(node["arm"])
     since = marks.get("hold", marks["attempt"])
@@ -350,7 +351,6 @@ def route(rec: Recording, node: dict, marks: dict) -> Outcome:
     if not carried.any():
         return Outcome(False, False, None, f"{p['object']} was never carried")
     path, start = rec.xy[:, source], rec.world(0)
-    size = rec.footprint(source)
     met, said, missed = marks["attempt"], [], []
     for mode, body in p["waypoints"]:
         b = rec.index(body)
@@ -358,8 +358,11 @@ def route(rec: Recording, node: dict, marks: dict) -> Outcome:
         keep = carried[frames]
         frames, ys = frames[keep], ys[keep]
         over = P.over_footprint(path, rec.xy[:, b], rec.half[b, :2]) & carried
+        if not len(frames):
+            return Outcome(False, False, None, f"{p['object']} was never carried across "
+                           f"{body}'s column")
+        gap = np.abs(ys - rec.xy[0, b, 1])
         if mode == "via":
-            gap = np.abs(ys - rec.xy[0, b, 1])
             side = gap <= p["y"]
             for mate in start.column_mates(body, (p["object"],)):
                 side &= gap < np.abs(ys - rec.xy[0, rec.index(mate), 1])
@@ -369,21 +372,17 @@ def route(rec: Recording, node: dict, marks: dict) -> Outcome:
             met = max(met, int(frames[side][0]))
             said.append(f"crossed {body}'s column at frame {int(frames[side][0])}")
             if not over.any():
-                missed.append(f"its centre never passed over {body}")
+                missed.append(f"it never passed over {body}")
             continue
-        if over.any():
-            frame = int(np.flatnonzero(over)[0])
-            return Outcome(False, False, frame, f"{p['object']} passed over {body} at frame "
-                           f"{frame}")
-        if not len(frames):
-            return Outcome(False, False, None, f"{p['object']} was never carried past "
-                           f"{body}'s column")
+        across = over[frames]
+        if across.any():
+            frame = int(frames[across][0])
+            return Outcome(False, False, frame, f"{p['object']} crossed {body}'s column over "
+                           f"it at frame {frame}")
         met = max(met, int(frames[0]))
         said.append(f"went round {body}")
-        touching = P.overlaps(path, size, rec.xy[:, b], rec.half[b, :2]) & carried
-        if touching.any():
-            missed.append(f"its footprint overlapped {body} at frame "
-                          f"{int(np.flatnonzero(touching)[0])}")
+        if over.any():
+            missed.append(f"it passed over {body} at frame {int(np.flatnonzero(over)[0])}")
     marks["objective"] = met
     words = f"{p['object']} {' and '.join(said)}"
     if missed:
@@ -398,21 +397,25 @@ def finish(rec: Recording, node: dict, marks: dict) -> Outcome:
     (never leaving, moving, grasping or closing at an object again); each handled object
     still held (pickups) or where it came to rest; no other object moved, knocked over or
     off the table (what pushes did is judged here, by its effect; a push's target may be
-    struck); the idle arm never
+    struck, within `struck_tolerance`); the idle arm never
     grasping or closing at an object, never in the work area. Every violation is named."""
     p = node["intent"]["params"]
     done, rests = marks.get("completion", 0), dict(marks.get("rests", ()))
     problems = []
     for name in dict.fromkeys(p["arms"]):
-        problems += _home_and_still(rec, arm_index(name), name, done, p)
-    handled = set()
+        problems += rec.cached(("home", name, done, p["home_radius"], p["frames"],
+                                p["still_radius"], p["deadline_frames"], p["leave_radius"]),
+                               lambda: _home_and_still(rec, arm_index(name), name, done, p))
     for body_name, keep, arm_name in p["keep"]:
-        body = rec.index(body_name)
-        handled.add(body)
-        problems += _kept(rec, body, keep, arm_index(arm_name), rests.get(body_name), p)
-    problems += _disturbed(rec, handled | {rec.index(b) for b in p["struck"]}, p)
+        problems += _kept(rec, rec.index(body_name), keep, arm_index(arm_name),
+                          rests.get(body_name), p)
+    handled = frozenset(rec.index(b) for b, _, _ in p["keep"])
+    struck = frozenset(rec.index(b) for b in p["struck"])
+    problems += rec.cached(("disturbed", handled, struck, p["disturb"], p["struck_tolerance"],
+                            p["topple_deg"]), lambda: _disturbed(rec, handled, struck, p))
     for name in (a for a in ARMS if a not in p["arms"]):
-        problems += _idle(rec, arm_index(name), name, p)
+        problems += rec.cached(("idle", name, tuple(map(tuple, p["operation_area"]))),
+                               lambda: _idle(rec, arm_index(name), name, p))
     if problems:
         return Outcome(False, False, done, "; ".join(problems))
     return Outcome(True, True, done, "back home and still, nothing else disturbed"
@@ -422,7 +425,7 @@ def finish(rec: Recording, node: dict, marks: dict) -> Outcome:
 def _home_and_still(rec: Recording, arm: int, name: str, done: int, p: dict) -> list[str]:
     ee, home = rec.ee[:, arm], rec.ee[0, arm]
     away = np.linalg.norm(ee - home, axis=1)
-    still = P.steady(ee, p["frames"], p["still_radius"])
+    still = rec.still(arm, p["frames"], p["still_radius"])
     settled = P.holds_for(away <= p["home_radius"], p["frames"]) & still
     arrived = P.first_true(settled, done)
     if arrived is None:
@@ -471,12 +474,14 @@ def _kept(rec: Recording, body: int, keep: str, arm: int, rest: int | None,
     return []
 
 
-def _disturbed(rec: Recording, handled: set[int], p: dict) -> list[str]:
+def _disturbed(rec: Recording, handled: frozenset[int], struck: frozenset[int],
+               p: dict) -> list[str]:
     problems = []
     table = rec.scene.table_height
     for body in rec.movable:
         if body in handled:
             continue
+        tolerance = p["struck_tolerance"] if body in struck else p["disturb"]
         name = rec.bodies[body]
         holder = next((ARMS[a] for a in range(2) if rec.holding(a)[-1] == body), None)
         moved = float(np.linalg.norm(rec.positions[-1, body] - rec.positions[0, body]))
@@ -486,8 +491,8 @@ def _disturbed(rec: Recording, handled: set[int], p: dict) -> list[str]:
             problems.append(f"{name} fell off the table")
         elif rec.tilt_deg(body) > p["topple_deg"]:
             problems.append(f"{name} was knocked over")
-        elif moved > p["disturb"]:
-            problems.append(f"{name} was moved {cm(moved)}")
+        elif moved > tolerance:
+            problems.append(f"{name} was moved {cm(moved)} (at most {cm(tolerance)})")
     return problems
 
 

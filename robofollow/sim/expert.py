@@ -2,7 +2,7 @@
 
 Plan points are executed in order, one arm moving at a time. Between two points the grasp
 centre moves on a straight line and its rotation turns by slerp, both with a smoothstep time
-profile at most LINEAR_SPEED / TURN_SPEED, with IK solved at every control step from the
+profile at most LINEAR_SPEED (or the point's own speed) / TURN_SPEED, with IK solved at every control step from the
 previous solution. Moves from and to `home` go in joint space (leaving home, to the IK
 solution of the first point, solved from a seed that faces the target). Gripper changes
 happen in place over GRIPPER_STEPS. The trajectory is open loop: it depends only on the plan
@@ -89,7 +89,8 @@ class Expert:
             elif at_home[arm]:
                 path = _joint_path(start, self.reach(arm, np.array(point.position), yaw))
             else:
-                path = self._cartesian(self.iks[arm], start, np.array(point.position), yaw)
+                path = self._cartesian(self.iks[arm], start, np.array(point.position), yaw,
+                                       point.speed or LINEAR_SPEED)
             at_home[arm] = point.position is None
             gripper = command[7 * arm + 6]
             ramp = np.linspace(gripper, point.gripper, len(path) + 1)[1:] if path else []
@@ -114,7 +115,8 @@ class Expert:
         solutions = [self.iks[arm].solve(target, top_down(y), seed) for y in (yaw, yaw + math.pi)]
         return min(solutions, key=lambda s: s[1] + 0.01 * abs(s[0][5]))[0]
 
-    def _cartesian(self, ik: ArmIK, start: np.ndarray, target: np.ndarray, yaw: float) -> list:
+    def _cartesian(self, ik: ArmIK, start: np.ndarray, target: np.ndarray, yaw: float,
+                   speed: float) -> list:
         position, rotation = ik.forward(start)
         begin = _quaternion(rotation)
         ends = [_quaternion(top_down(yaw)), _quaternion(top_down(yaw + math.pi))]
@@ -122,7 +124,7 @@ class Expert:
         distance, turn = float(np.linalg.norm(target - position)), _angle(begin, end)
         if distance < 1e-4 and turn < 1e-3:
             return []
-        steps = max(2, math.ceil(max(distance / LINEAR_SPEED, turn / TURN_SPEED) * CONTROL_HZ))
+        steps = max(2, math.ceil(max(distance / speed, turn / TURN_SPEED) * CONTROL_HZ))
         path, q = [], start
         for s in _smoothstep(steps):
             q, _ = ik.solve(position + s * (target - position), _rotation(_slerp(begin, end, s)), q)
