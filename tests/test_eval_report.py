@@ -74,6 +74,16 @@ def test_the_report_files_show_table_gap_confusions_and_reasons(run):
     assert "background: rgb(105, 255, 105)" in page  # IS 100 shaded
 
 
+def test_clipped_actions_are_counted_and_shown_only_when_there_are_some(run):
+    assert "joint limits" not in write_report(run)[0].read_text()
+    lines = [dict(r, clipped=c) for r, c in zip(RESULTS, (0, 12, 3, 0), strict=True)]
+    (run / "episodes.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines))
+    assert report_data("mine", OPTIONS, lines)["clipped"] == {"actions": 15, "episodes": 2}
+    markdown, html = write_report(run)
+    assert "15 actions in 2 episodes asked for a joint past its limit" in markdown.read_text()
+    assert "<h2>Targets past the joint limits</h2>" in html.read_text()
+
+
 def test_records_with_references_read_intent_against_chance(run):
     lines = [dict(r, chance={"IS": 0.25, "CR": 0.125}, followed_intent=0.5) for r in RESULTS]
     (run / "episodes.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines))

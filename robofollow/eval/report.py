@@ -95,6 +95,8 @@ def report_data(name: str, options: EvalOptions, results: list[dict]) -> dict:
                            for stage, count in failures.most_common()],
         "errors": Counter(r["error"].split(": ", 1)[-1] for r in results if r["error"]
                           ).most_common(TOP),
+        "clipped": {"actions": sum(r.get("clipped", 0) for r in results),
+                    "episodes": sum(1 for r in results if r.get("clipped"))},
         "videos": [(r["episode"], r["video"]) for r in results if r.get("video")][:50]}
 
 

@@ -17,8 +17,8 @@ import numpy as np
 
 from robofollow.compiler.world import DIRECTIONS
 from robofollow.oracle import predicates as P
-from robofollow.oracle.recording import Recording, arm_index
 from robofollow.oracle.instead import where
+from robofollow.oracle.recording import Recording, arm_index
 from robofollow.trajectory import ARMS, yaw
 
 
@@ -50,8 +50,11 @@ def went_for(rec: Recording, node: dict, marks: dict) -> Outcome:
         return Outcome(False, False, t, f"the {params['arm']} arm first "
                        f"{attempt.words(rec.bodies)}, not {name}")
     found = attempt.words(rec.bodies)
+    holds = [h for h in rec.holds(arm) if h.body == source and h.start >= t]
+    if not holds:
+        return Outcome(True, False, t, f"{found}, but never grasped it")
     best = 0.0
-    for hold in (h for h in rec.holds(arm) if h.body == source and h.start >= t):
+    for hold in holds:
         rise = rec.rise(source, hold.start)[hold.start:hold.end]
         lifted = P.first_true(rise >= rec.profile.min_lift)
         if lifted is not None and "lift" not in marks:
@@ -64,8 +67,6 @@ def went_for(rec: Recording, node: dict, marks: dict) -> Outcome:
                 return Outcome(True, False, t, f"{found}, but lifted {rec.bodies[support]} "
                                "with it")
             return Outcome(True, True, t, f"{found} and lifted it {cm(best)}")
-    if not any(h.body == source for h in rec.holds(arm)):
-        return Outcome(True, False, t, f"{found}, but never grasped it")
     return Outcome(True, False, t, f"{found}, but lifted it {cm(best)} (needs {cm(lift)})")
 
 
