@@ -13,6 +13,7 @@ from robofollow.sim import robot
 from robofollow.sim.expert import Expert
 from robofollow.sim.rollout import META_KEYS, execute
 from robofollow.sim.simulation import Simulation
+from tests.judged import Script
 from tests.sim_helpers import benchmark, episode
 
 
@@ -199,3 +200,17 @@ def test_expert_scores_are_deterministic():
     a, b = perform(record), perform(record)
     assert a == b and credits(a) == full(a)
     assert np.isclose(a.intent_score, 1.0)
+
+
+# (j) a sequence mixing a pickup and a placement: each step's end state decides completion
+def test_a_mixed_sequence_completes_on_every_steps_end_state():
+    record = episode("scene1/L0/place_yellow_block_1_behind_red_cylinder#r1")
+    both = Behaviour(steps=(Step(action="pick", arm="left", source="yellow_block_2"),
+                            behaviour_of(record).steps[0]))
+    scene = benchmark().spec.scenes["scene1"]
+    done = Script(record["episode"]).perform(both)
+    result = score(both, done.trajectory(), scene)
+    assert result.intent_score == result.execution_score == 1.0 and result.complete
+    dropped = Script(record["episode"]).perform(both).grip("left", 1.0)  # lets the pickup go
+    result = score(both, dropped.trajectory(), scene)
+    assert result.stages[-1].intent == 0.0 and not result.complete

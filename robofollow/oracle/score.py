@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import itertools
 
-from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.behaviour import Behaviour, Step
 from robofollow.compiler.goals import scoring_nodes
 from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
 from robofollow.compiler.spec import Scene
@@ -35,7 +35,7 @@ def score(behaviour: Behaviour, trajectory: Trajectory, scene: Scene,
     scene's training behaviours by label) are what 'what it did instead' is matched against,
     besides the instructed behaviour and a conditional's other branch."""
     rec = Recording(trajectory, scene, profile)
-    stages, marks = evaluate(rec, behaviour)
+    stages = evaluate(rec, behaviour)
     other = None
     options = [("instructed", behaviour)]
     if behaviour.other is not None:
@@ -47,7 +47,7 @@ def score(behaviour: Behaviour, trajectory: Trajectory, scene: Scene,
     options += list((candidates or {}).items())
     return EpisodeScore(episode=episode, intent_score=_total(stages, "intent"),
                         execution_score=_total(stages, "execution"),
-                        complete=complete(rec, behaviour, stages, marks, bool(other)),
+                        complete=complete(rec, behaviour, stages, bool(other)),
                         stages=tuple(stages), executed_behaviour=_closest(rec, options),
                         other_branch=other, profile=profile.model_dump(mode="json"))
 
@@ -62,7 +62,7 @@ def _carried_out(rec: Recording, branch: Behaviour, selected: Behaviour) -> bool
     not contained in it)."""
     if not branch.steps or passes_work(branch, selected, rec.profile):
         return False
-    stages, _ = evaluate(rec, branch)
+    stages = evaluate(rec, branch)
     return all(s.intent >= s.weight * FULL for s in stages if s.name != "finish")
 
 
@@ -74,16 +74,16 @@ def _void(stage: StageResult) -> StageResult:
         "out too)")})
 
 
-def complete(rec: Recording, behaviour: Behaviour, stages: list[StageResult], marks: dict,
+def complete(rec: Recording, behaviour: Behaviour, stages: list[StageResult],
              other_branch: bool = False) -> bool:
     """Completion. Profile 'strict': every stage but the finish executed in full. Profile
     'paper' (the default), action-dependent as the paper defines it: pickups and sequences of
-    pickups need final IS and ES of at least `pickup_complete` (0.8); a transfer (Scene 3) needs its final
-    placement-and-orientation stage executed (gated); any other action needs its final state
-    over the last `final_frames` frames (the object at rest in the asked relation / on / in
-    the target, let go of; a pushed object moved far enough towards the target), the object
-    having been handled by the named arm. A branch asking for nothing is complete when
-    nothing was done; a conditional whose other branch was carried out is not."""
+    pickups need final IS and ES of at least `pickup_complete`; a transfer (Scene 3) needs its
+    placement-and-orientation stage executed (gated); any other action needs each step's end
+    state over the last `final_frames` frames, brought about by its named arm (an object at
+    rest in the asked relation / on / in the target and let go of; a pushed object moved far
+    enough towards the target; a picked object held). A branch asking for nothing is complete
+    when nothing was done; a conditional whose other branch was carried out is not."""
     if other_branch:
         return False
     if rec.profile.completion == "strict" or not behaviour.steps:
@@ -93,27 +93,30 @@ def complete(rec: Recording, behaviour: Behaviour, stages: list[StageResult], ma
         least = rec.profile.pickup_complete - 1e-6
         return _total(stages, "intent") >= least and _total(stages, "execution") >= least
     if any(s.name == "orientation" for s in stages):
-        outcome = next(s for s in stages if s.name == "orientation")
-        return outcome.execution > 0
-    nodes = scoring_nodes(behaviour, rec.profile)
-    return all(_final_state(rec, node) for _, node, _ in nodes
-               if node["name"] not in SOURCE_STAGES + ("finish",))
+        return next(s for s in stages if s.name == "orientation").execution > 0
+    nodes = {node_id: node for node_id, node, _ in scoring_nodes(behaviour, rec.profile)}
+    return all(_final_state(rec, step, nodes.get(f"{key}.objective".lstrip(".")))
+               for key, step in _steps(behaviour))
 
 
-def _final_state(rec: Recording, node: dict) -> bool:
-    """The objective's end state holds over the last frames, brought about by the named arm
-    and let go of."""
-    params = node["execution"]["params"]
-    arm, source = arm_index(node["arm"]), rec.index(params["object"])
-    if rec.first_attempt(arm, body=source) is None or rec.holding(arm)[-1] == source:
+def _final_state(rec: Recording, step: Step, node: dict | None) -> bool:
+    """The step's end state over the last frames, brought about by its named arm: a picked
+    object still held, any other let go of and its objective's rest geometry holding."""
+    arm, source = arm_index(step.arm), rec.index(step.source)
+    if rec.first_attempt(arm, body=source) is None:
+        return False
+    if node is None:  # a pickup
+        return rec.holding(arm)[-1] == source
+    if rec.holding(arm)[-1] == source:
         return False
     check = AT_REST[node["execution"]["predicate"]]
+    params = node["execution"]["params"]
     last = range(max(0, rec.last - rec.profile.final_frames + 1), rec.last + 1)
     return all(check(rec, params, frame) is None for frame in last)
 
 
-def evaluate(rec: Recording, behaviour: Behaviour) -> tuple[list[StageResult], dict]:
-    """Each stage of the behaviour's goal DAG, gated; and the marks each step left."""
+def evaluate(rec: Recording, behaviour: Behaviour) -> list[StageResult]:
+    """Each stage of the behaviour's goal DAG, gated."""
     nodes = scoring_nodes(behaviour, rec.profile)
     marks: dict[str, dict] = {}
     reversed_steps = _reverse_order(rec, behaviour)
@@ -142,7 +145,7 @@ def evaluate(rec: Recording, behaviour: Behaviour) -> tuple[list[StageResult], d
                                    first_step=outcome.frame, reason=reason))
         blocked_intent = blocked_intent or (None if intent else node_id)
         blocked_execution = blocked_execution or (None if execution else node_id)
-    return results, marks
+    return results
 
 
 def _evaluate_node(rec: Recording, node: dict, key: str, mark: dict) -> Outcome:
@@ -172,7 +175,7 @@ def _prepare(node: dict, mark: dict, marks: dict, step: str, behaviour: Behaviou
         mark.setdefault("start", previous.get("lift", previous.get("attempt", 0)))
 
 
-def _steps(behaviour: Behaviour) -> list[tuple[str, object]]:
+def _steps(behaviour: Behaviour) -> list[tuple[str, Step]]:
     """(marks key, step) of each step."""
     if len(behaviour.steps) == 1:
         return [("", behaviour.steps[0])]
@@ -224,7 +227,7 @@ def _closest(rec: Recording, options: list[tuple[str, Behaviour]]) -> ExecutedBe
         if behaviour.steps in seen or not _bodies(behaviour) <= set(rec.bodies):
             continue  # already matched under another name, or made for another layout
         seen.add(behaviour.steps)
-        stages, _ = evaluate(rec, behaviour)
+        stages = evaluate(rec, behaviour)
         scores = (_total(stages, "intent"), _total(stages, "execution"))
         key = (round(sum(scores), 6), len(stages))
         if key > best_key:
