@@ -13,6 +13,7 @@ placement-and-orientation stage executed) and does not need every intermediate s
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -420,6 +421,22 @@ def test_the_oracle_agrees_with_the_judged_verdict(case: Case):
     assert case.ES[0] - 1e-6 <= result.execution_score <= case.ES[1] + 1e-6, result.table()
     if case.complete is not None:
         assert result.complete is case.complete, result.table()
+    assert_what_it_did_agrees(result)
+
+
+EVENT = re.compile(r"(grasped|pushed|closed its fingers at) (\w+) at frame (\d+)")
+SAID = {"grasped": "grasped {body} (frame {frame})", "pushed": "pushed {body} (frame {frame})",
+        "closed its fingers at": "from {body} without grasping it (frame {frame})"}
+
+
+def assert_what_it_did_agrees(result) -> None:
+    """Every grasp, push or close a stage's reason cites is in 'what it did', at its frame;
+    'nothing moved' comes with no credit."""
+    did = result.executed_behaviour.description
+    for stage in result.stages:
+        for verb, body, frame in EVENT.findall(stage.reason):
+            assert SAID[verb].format(body=body, frame=frame) in did, (stage.reason, did)
+    assert did != "nothing moved" or result.intent_score == 0.0, did
 
 
 def test_the_catalogue_spreads_over_scenes_levels_and_actions():
