@@ -21,7 +21,7 @@ from robofollow.oracle.chance import passes_work
 from robofollow.oracle.instead import describe_actions
 from robofollow.oracle.recording import Recording, arm_index
 from robofollow.oracle.results import EpisodeScore, ExecutedBehaviour, StageResult
-from robofollow.oracle.stages import AT_REST, EVALUATORS, Outcome
+from robofollow.oracle.stages import AT_REST, EVALUATORS, GOING_FOR, Outcome
 from robofollow.trajectory import ARMS, Trajectory
 
 FULL = 0.99  # a score at least this share of its maximum counts as full credit
@@ -103,7 +103,7 @@ def _final_state(rec: Recording, step: Step, node: dict | None) -> bool:
     """The step's end state over the last frames, brought about by its named arm: a picked
     object still held, any other let go of and its objective's rest geometry holding."""
     arm, source = arm_index(step.arm), rec.index(step.source)
-    if rec.first_attempt(arm, body=source) is None:
+    if rec.first_attempt(arm, kinds=GOING_FOR[step.action], body=source) is None:
         return False
     if node is None:  # a pickup
         return rec.holding(arm)[-1] == source
@@ -132,7 +132,7 @@ def evaluate(rec: Recording, behaviour: Behaviour) -> list[StageResult]:
             _prepare(node, mark, marks, step, behaviour)
             outcome = _evaluate_node(rec, node, key, mark)
             if node["name"] in SOURCE_STAGES:
-                outcome = _first_arm(rec, node, outcome)
+                outcome = _first_arm(rec, node, _step_of(behaviour, step), outcome)
         intent = outcome.intent and not blocked_intent
         execution = outcome.execution and intent and not blocked_execution
         reason = outcome.reason
@@ -191,15 +191,20 @@ def _last_step(behaviour: Behaviour) -> str:
     return f"step{len(behaviour.steps)}" if len(behaviour.steps) > 1 else ""
 
 
-def _first_arm(rec: Recording, node: dict, outcome: Outcome) -> Outcome:
+def _step_of(behaviour: Behaviour, key: str) -> Step:
+    """The step a node's marks key names ("" for a single step, "step2" for the second)."""
+    return behaviour.steps[_step_number(key) - 1 if key else 0]
+
+
+def _first_arm(rec: Recording, node: dict, step: Step, outcome: Outcome) -> Outcome:
     """The named arm must go for its step's object first: the other arm going for that
     object before it (or instead of it) takes the source stage's Intent."""
-    named = arm_index(node["arm"])
-    body = rec.index(node["intent"]["params"]["object"])
-    theirs = rec.first_attempt(1 - named, body=body)
+    named, kinds = arm_index(node["arm"]), GOING_FOR[step.action]
+    body = rec.index(step.source)
+    theirs = rec.first_attempt(1 - named, kinds=kinds, body=body)
     if theirs is None:
         return outcome
-    ours = rec.first_attempt(named, body=body)
+    ours = rec.first_attempt(named, kinds=kinds, body=body)
     if ours is not None and ours.frame <= theirs.frame:
         return outcome
     return Outcome(False, False, theirs.frame, f"the {ARMS[1 - named]} arm, not the "
@@ -210,7 +215,8 @@ def _reverse_order(rec: Recording, behaviour: Behaviour) -> str | None:
     """A sequence whose later step's object was gone for before an earlier step's."""
     starts = []
     for step in behaviour.steps if len(behaviour.steps) > 1 else ():
-        attempt = rec.first_attempt(arm_index(step.arm), body=rec.index(step.source))
+        attempt = rec.first_attempt(arm_index(step.arm), kinds=GOING_FOR[step.action],
+                                    body=rec.index(step.source))
         starts.append((step.source, attempt.frame if attempt else None))
     for (earlier, a), (later, b) in itertools.pairwise(starts):
         if b is not None and (a is None or b < a):

@@ -30,6 +30,12 @@ class Outcome:
     reason: str
 
 
+# what counts as going for a step's object: a grasp or a close (for a push: a grasp or a
+# push); brushing an object on the way is judged by its effect, in the finish
+GRASPING = ("grasp", "close")
+GOING_FOR = {"pick": GRASPING, "place": GRASPING, "push": ("grasp", "push")}
+
+
 def cm(metres: float) -> str:
     return f"{metres * 100:.1f} cm"
 
@@ -42,7 +48,7 @@ def went_for(rec: Recording, node: dict, marks: dict) -> Outcome:
     it stood on with it)."""
     params, lift = node["intent"]["params"], node["execution"]["params"]["min_lift"]
     arm, source, name = arm_index(params["arm"]), rec.index(params["object"]), params["object"]
-    attempt = rec.first_attempt(arm, marks.get("start", 0), ("grasp", "close"))
+    attempt = rec.first_attempt(arm, marks.get("start", 0), GOING_FOR["pick"])
     if attempt is None:
         return Outcome(False, False, None, f"the {params['arm']} arm never went for an object")
     t = marks["attempt"] = attempt.frame
@@ -75,7 +81,7 @@ def push_contact(rec: Recording, node: dict, marks: dict) -> Outcome:
     gripper was closed and low when the source started to move."""
     intent, execution = node["intent"]["params"], node["execution"]["params"]
     arm, source, name = arm_index(intent["arm"]), rec.index(intent["object"]), intent["object"]
-    attempt = rec.first_attempt(arm, marks.get("start", 0), ("grasp", "push"))
+    attempt = rec.first_attempt(arm, marks.get("start", 0), GOING_FOR["push"])
     if attempt is None:
         return Outcome(False, False, None, f"the {intent['arm']} arm never pushed an object")
     t = marks["attempt"] = attempt.frame
@@ -444,7 +450,7 @@ def _home_and_still(rec: Recording, arm: int, name: str, done: int, p: dict) -> 
                         f"({cm(float(away[arrived:].max()))} away)")
     elif moved is not None:
         problems.append(f"the {name} arm moved again at home from frame {moved}")
-    again = rec.first_attempt(arm, done + 1, ("grasp", "close"))
+    again = rec.first_attempt(arm, done + 1, GRASPING)
     closes = rec.closes(arm)
     shut = closes[closes > done]
     if again is not None:
@@ -499,7 +505,7 @@ def _disturbed(rec: Recording, handled: frozenset[int], struck: frozenset[int],
 
 def _idle(rec: Recording, arm: int, name: str, p: dict) -> list[str]:
     problems = []
-    attempt = rec.first_attempt(arm, kinds=("grasp", "close"))
+    attempt = rec.first_attempt(arm, kinds=GRASPING)
     if attempt is not None:
         problems.append(f"the idle {name} arm {attempt.words(rec.bodies)}")
     entered = P.first_true(P.inside_box(rec.ee[:, arm], p["operation_area"]))
