@@ -55,6 +55,7 @@ class ScoringProfile(Model):
     # setting down: Intent from where the object was delivered, Execution from where it rests
     aim_radius: float = 0.07  # m: delivered this near (xy) the nearest stack / bowl / label
     set_down_height: float = 0.03  # m: released at most this high above the surface under it
+    carry_min: float = 0.03  # m: set down at least this far (xy) from where it was grasped
     rest_tolerance: float = 0.01  # m: bottom within this of a surface: resting on it
     settle_frames: int = 5  # frames an object must keep still to have come to rest
     settle_range: float = 0.002  # m: and move at most this over them

@@ -155,21 +155,27 @@ class Delivery:
 
 def deliveries(rec: Recording, arm: int, body: int, after: int) -> tuple[Delivery, ...]:
     """Each time the arm let go of `body` after frame `after` (the lift), in order; a hold
-    lasting to the end counts where the body came lowest, if within `set_down_height`."""
+    lasting to the end counts where the body came lowest, if within `set_down_height`. Only
+    at least `carry_min` (xy) from where that hold took it: putting an object back where it
+    was taken from, or never carrying it away, is not setting it down anywhere."""
     def compute() -> tuple[Delivery, ...]:
-        found = []
+        p, found = rec.profile, []
         for hold in rec.holds(arm):
             if hold.body != body or (hold.end is not None and hold.end <= after):
                 continue
+            taken = rec.xy[hold.start, body]
+            away = np.linalg.norm(rec.xy[:, body] - taken, axis=1) >= p.carry_min
             if hold.end is not None:
-                height = rec.heights_above_surface(body, slice(hold.end, hold.end + 1))[0]
-                found.append(Delivery(hold.end, True, float(height),
-                                      rec.settled(body, hold.end)))
+                if away[hold.end]:
+                    height = rec.heights_above_surface(body, slice(hold.end, hold.end + 1))[0]
+                    found.append(Delivery(hold.end, True, float(height),
+                                          rec.settled(body, hold.end)))
                 continue
             first = max(after, hold.start)
             heights = rec.heights_above_surface(body, slice(first, None))
-            lowest = int(np.argmin(heights))
-            if heights[lowest] <= rec.profile.set_down_height:
+            low = np.flatnonzero((heights <= p.set_down_height) & away[first:])
+            if len(low):
+                lowest = int(low[np.argmin(heights[low])])
                 found.append(Delivery(first + lowest, False, float(heights[lowest]), None))
         return tuple(found)
     return rec.cached(("deliveries", arm, body, after), compute)
@@ -189,7 +195,8 @@ def _placed(rec: Recording, node: dict, marks: dict, aim: Check, exact: Check,
         return Outcome(False, False, None, f"{name} was never lifted")
     found = deliveries(rec, arm_index(node["arm"]), rec.index(name), marks["lift"])
     if not found:
-        return Outcome(False, False, None, f"{name} was never set down or let go of")
+        return Outcome(False, False, None, f"{name} was never set down or let go of away "
+                       "from where it was taken")
     aimed = [d for d in found if aim(rec, intent, d.frame) is None]
     if not aimed:
         first = found[0]
