@@ -73,7 +73,7 @@ class _Builder:
             self.add(f"{prefix}objective", "relative_placement", weight, step.arm,
                      _predicate("delivered_towards", object=step.source,
                                 relation=step.relation, landmark=step.target,
-                                cone_deg=p.relation_cone_deg),
+                                cone_deg=p.relation_cone_deg, reach=p.relation_reach),
                      _predicate("rests_in_relation", object=step.source,
                                 relation=step.relation, landmark=step.target,
                                 range=p.relation_range, cone_deg=p.relation_cone_deg,

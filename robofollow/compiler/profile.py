@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Literal
 
 from robofollow.compiler.model import Model
+from robofollow.compiler.world import RELATION_RANGE
 
 
 class ScoringProfile(Model):
@@ -59,6 +60,8 @@ class ScoringProfile(Model):
     rest_tolerance: float = 0.01  # m: bottom within this of a surface: resting on it
     settle_frames: int = 5  # frames an object must keep still to have come to rest
     settle_range: float = 0.002  # m: and move at most this over them
+    relation_reach: float = RELATION_RANGE  # m: a placement's side counts this near its
+    #                                          landmark (as far as the language's relations reach)
     relation_range: float = 0.12  # m: placement relations hold within this distance
     relation_cone_deg: float = 45.0  # deg: and within this angle of the direction
     stack_xy: float = 0.03  # m: stacked object centred over its target

@@ -254,14 +254,17 @@ def _aimed_at(kinds: tuple[str, ...] | None, key: str) -> Check:
 
 
 def _towards(rec: Recording, p: dict, frame: int) -> str | None:
-    """Delivered on the asked side of the landmark (any distance); 'next to': the landmark
-    is the nearest body."""
+    """Delivered on the asked side of the landmark, whatever the precision, as far as a
+    relation reaches ('next to': any side); 'next to': the landmark is the nearest body."""
     source, landmark = rec.index(p["object"]), rec.index(p["landmark"])
+    offset = rec.xy[frame, source] - rec.xy[frame, landmark]
+    distance = float(np.linalg.norm(offset))
+    if distance > p["reach"]:
+        return f"{cm(distance)} from {p['landmark']}, beyond a relation's {cm(p['reach'])}"
     direction = DIRECTIONS.get(p["relation"])
     if direction is None:
         nearest = _nearest(rec, source, frame, None)
         return None if nearest == landmark else f"nearest {rec.bodies[nearest]}"
-    offset = rec.xy[frame, source] - rec.xy[frame, landmark]
     return None if P.in_cone(offset, direction, p["cone_deg"]) else "on another side"
 
 
