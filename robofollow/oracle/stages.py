@@ -422,7 +422,8 @@ def finish(rec: Recording, node: dict, marks: dict) -> Outcome:
     for name in dict.fromkeys(p["arms"]):
         problems += rec.cached(("home", name, done, p["home_radius"], p["frames"],
                                 p["still_radius"], p["deadline_frames"], p["leave_radius"]),
-                               lambda: _home_and_still(rec, arm_index(name), name, done, p))
+                               lambda name=name: _home_and_still(rec, arm_index(name), name,
+                                                                 done, p))
     for body_name, keep, arm_name in p["keep"]:
         problems += _kept(rec, rec.index(body_name), keep, arm_index(arm_name),
                           rests.get(body_name), p)
@@ -432,7 +433,7 @@ def finish(rec: Recording, node: dict, marks: dict) -> Outcome:
                             p["topple_deg"]), lambda: _disturbed(rec, handled, struck, p))
     for name in (a for a in ARMS if a not in p["arms"]):
         problems += rec.cached(("idle", name, tuple(map(tuple, p["operation_area"]))),
-                               lambda: _idle(rec, arm_index(name), name, p))
+                               lambda name=name: _idle(rec, arm_index(name), name, p))
     if problems:
         return Outcome(False, False, done, "; ".join(problems))
     return Outcome(True, True, done, "back home and still, nothing else disturbed"
