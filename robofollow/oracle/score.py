@@ -19,7 +19,7 @@ from robofollow.compiler.spec import Scene
 from robofollow.compiler.training import describe
 from robofollow.oracle.chance import passes_work
 from robofollow.oracle.instead import describe_actions
-from robofollow.oracle.recording import Recording, arm_index
+from robofollow.oracle.recording import Attempt, Recording, arm_index
 from robofollow.oracle.results import EpisodeScore, ExecutedBehaviour, StageResult
 from robofollow.oracle.stages import AT_REST, EVALUATORS, GOING_FOR, Outcome
 from robofollow.trajectory import ARMS, Trajectory
@@ -94,16 +94,17 @@ def complete(rec: Recording, behaviour: Behaviour, stages: list[StageResult],
         return _total(stages, "intent") >= least and _total(stages, "execution") >= least
     if any(s.name == "orientation" for s in stages):
         return next(s for s in stages if s.name == "orientation").execution > 0
-    nodes = {node_id: node for node_id, node, _ in scoring_nodes(behaviour, rec.profile)}
-    return all(_final_state(rec, step, nodes.get(f"{key}.objective".lstrip(".")))
-               for key, step in _steps(behaviour))
+    objectives = {node_id.rpartition(".")[0]: node
+                  for node_id, node, _ in scoring_nodes(behaviour, rec.profile)
+                  if node_id.rpartition(".")[2] == "objective"}
+    return all(_final_state(rec, step, objectives.get(key)) for key, step in _steps(behaviour))
 
 
 def _final_state(rec: Recording, step: Step, node: dict | None) -> bool:
     """The step's end state over the last frames, brought about by its named arm: a picked
     object still held, any other let go of and its objective's rest geometry holding."""
     arm, source = arm_index(step.arm), rec.index(step.source)
-    if rec.first_attempt(arm, kinds=GOING_FOR[step.action], body=source) is None:
+    if _goes_for(rec, arm, step) is None:
         return False
     if node is None:  # a pickup
         return rec.holding(arm)[-1] == source
@@ -132,7 +133,7 @@ def evaluate(rec: Recording, behaviour: Behaviour) -> list[StageResult]:
             _prepare(node, mark, marks, step, behaviour)
             outcome = _evaluate_node(rec, node, key, mark)
             if node["name"] in SOURCE_STAGES:
-                outcome = _first_arm(rec, node, _step_of(behaviour, step), outcome)
+                outcome = _first_arm(rec, dict(_steps(behaviour))[step], outcome)
         intent = outcome.intent and not blocked_intent
         execution = outcome.execution and intent and not blocked_execution
         reason = outcome.reason
@@ -165,7 +166,7 @@ def _prepare(node: dict, mark: dict, marks: dict, step: str, behaviour: Behaviou
     release, else its objective, lift or attempt) and knows where each handled object came
     to rest."""
     if node["name"] == "finish":
-        last = marks.get(_last_step(behaviour), {})
+        last = marks.get(_steps(behaviour)[-1][0], {})
         mark["completion"] = next((last[k] for k in ("release", "objective", "lift", "attempt")
                                    if k in last), 0)
         mark["rests"] = tuple((s.source, marks[key]["rest"]) for key, s in _steps(behaviour)
@@ -187,36 +188,30 @@ def _step_number(step: str) -> int:
     return int(step.removeprefix("step"))
 
 
-def _last_step(behaviour: Behaviour) -> str:
-    return f"step{len(behaviour.steps)}" if len(behaviour.steps) > 1 else ""
+def _goes_for(rec: Recording, arm: int, step: Step) -> Attempt | None:
+    """The arm's first attempt at the step's object of the kinds that go for it."""
+    return rec.first_attempt(arm, kinds=GOING_FOR[step.action], body=rec.index(step.source))
 
 
-def _step_of(behaviour: Behaviour, key: str) -> Step:
-    """The step a node's marks key names ("" for a single step, "step2" for the second)."""
-    return behaviour.steps[_step_number(key) - 1 if key else 0]
-
-
-def _first_arm(rec: Recording, node: dict, step: Step, outcome: Outcome) -> Outcome:
+def _first_arm(rec: Recording, step: Step, outcome: Outcome) -> Outcome:
     """The named arm must go for its step's object first: the other arm going for that
     object before it (or instead of it) takes the source stage's Intent."""
-    named, kinds = arm_index(node["arm"]), GOING_FOR[step.action]
-    body = rec.index(step.source)
-    theirs = rec.first_attempt(1 - named, kinds=kinds, body=body)
+    named = arm_index(step.arm)
+    theirs = _goes_for(rec, 1 - named, step)
     if theirs is None:
         return outcome
-    ours = rec.first_attempt(named, kinds=kinds, body=body)
+    ours = _goes_for(rec, named, step)
     if ours is not None and ours.frame <= theirs.frame:
         return outcome
     return Outcome(False, False, theirs.frame, f"the {ARMS[1 - named]} arm, not the "
-                   f"{node['arm']}, {theirs.words(rec.bodies)}")
+                   f"{step.arm}, {theirs.words(rec.bodies)}")
 
 
 def _reverse_order(rec: Recording, behaviour: Behaviour) -> str | None:
     """A sequence whose later step's object was gone for before an earlier step's."""
     starts = []
     for step in behaviour.steps if len(behaviour.steps) > 1 else ():
-        attempt = rec.first_attempt(arm_index(step.arm), kinds=GOING_FOR[step.action],
-                                    body=rec.index(step.source))
+        attempt = _goes_for(rec, arm_index(step.arm), step)
         starts.append((step.source, attempt.frame if attempt else None))
     for (earlier, a), (later, b) in itertools.pairwise(starts):
         if b is not None and (a is None or b < a):
