@@ -143,6 +143,16 @@ def _seconds(text: str) -> float:
     return value
 
 
+def _cameras(text: str) -> tuple[str, ...]:
+    from robofollow.sim.cameras import CAMERA_NAMES
+
+    names = tuple(name.strip() for name in text.split(",") if name.strip())
+    unknown = [name for name in names if name not in CAMERA_NAMES]
+    if unknown or not names:
+        raise argparse.ArgumentTypeError(f"cameras are {', '.join(CAMERA_NAMES)}; got {text!r}")
+    return names
+
+
 def _size(text: str) -> tuple[int, int]:
     try:
         width, height = (int(v) for v in text.lower().split("x"))
@@ -295,6 +305,39 @@ def cmd_generate(args) -> int:
     for failure in result.failed:
         print(f"  failed: {failure['failed']}", file=sys.stderr)
     return 1 if result.failed else 0
+
+
+def cmd_train(args) -> int:
+    from robofollow.learn.train import TrainOptions, default_cache, resumed_options, train
+
+    out = Path(args.out)
+    given = {name: getattr(args, name) for name in TRAIN_OPTIONS
+             if getattr(args, name) is not None}
+    if args.policy is not None:
+        given["kind"] = args.policy
+    if args.resume:
+        options = resumed_options(out, Path(args.dataset), given)
+    else:
+        if out.exists() and any(out.iterdir()):
+            raise RoboFollowError(f"{out} is not empty; choose a new folder or --resume")
+        options = TrainOptions(dataset=str(Path(args.dataset).resolve()), **given)
+    cache = None if args.no_cache else default_cache()
+    try:
+        record = train(options, out, args.resume, progress=not args.quiet, cache=cache,
+                       stop_at=args.stop_at)
+    except OSError as error:
+        raise RoboFollowError(f"cannot write the checkpoint in {out}: {error}") from None
+    val = record["val_loss"]
+    print(f"{out}: {options.kind} baseline, {record['steps']} of {options.steps} steps, loss {record['loss']:.4f}"
+          + (f", validation loss {val:.4f}" if val is not None else "")
+          + f", {record['wall_seconds'] / 60:.1f} min on {record['cores']} cores")
+    print(f"evaluate it: robofollow eval --policy {out} --out runs/{out.name}")
+    return 0
+
+
+TRAIN_OPTIONS = ("steps", "batch", "learning_rate", "seed", "cameras", "factor", "shift",
+                 "chunk", "execute", "val_fraction", "checkpoint_every", "episodes_per_task",
+                 "variants_per_task")
 
 
 def cmd_dataset_check(args) -> int:
@@ -509,7 +552,8 @@ def build_parser() -> argparse.ArgumentParser:
                "eval --policy mypkg.policies:make --out runs/mine",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--policy", required=True,
-                   help="expert, blind, noop, random, module:factory, ws://HOST:PORT (openpi) or "
+                   help="expert, blind, noop, random, baseline:NAME (a shipped baseline), a "
+                        "checkpoint folder, module:factory, ws://HOST:PORT (openpi) or "
                         "tcp://HOST:PORT (upstream); servers take ?timeout=S&retries=N")
     p.add_argument("--out", required=True, metavar="RUN", help="run folder")
     p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
@@ -560,8 +604,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "`robofollow eval --policy tcp://HOST:PORT` or upstream's evaluator.")
     p.add_argument("--protocol", choices=("websocket", "tcp"), default="websocket",
                    help="wire protocol (default: websocket)")
-    p.add_argument("--policy", required=True, help="expert, blind, noop, random, or "
-                                                    "module:factory")
+    p.add_argument("--policy", required=True, help="expert, blind, noop, random, "
+                   "baseline:NAME, a checkpoint folder, or module:factory")
     p.add_argument("--host", default="0.0.0.0", help="address to listen on (default: 0.0.0.0)")
     p.add_argument("--port", type=_positive, default=8000, help="port (default: 8000)")
     p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
@@ -637,6 +681,61 @@ def build_parser() -> argparse.ArgumentParser:
                         "beside ANSWERS.jsonl)")
     q.add_argument("--json", action="store_true", help="print the grades as JSON")
     q.set_defaults(handler=cmd_vqa_score)
+
+    p = commands.add_parser(
+        "train", help="train a learned baseline on a dataset (CPU; needs robofollow[train])",
+        description="Behaviour cloning from scratch (no downloaded weights) on a LeRobot v2.1 / "
+                    "v3.0 dataset written by `robofollow generate`: a small CNN over the "
+                    "cameras, the joint state and the instruction (text: its words; form: its "
+                    "logical form; blind: nothing) predict chunks of joint targets (L1 loss). "
+                    "Checkpoints go to OUT every --checkpoint-every steps and at the end; an "
+                    "interrupted run continues with --resume. OUT is then a policy: "
+                    "`robofollow eval --policy OUT`.",
+        epilog="examples:\n  robofollow generate --out demos/scene2 --tasks scene2\n  "
+               "robofollow train demos/scene2 --policy text --out runs/scene2-text\n  "
+               "robofollow train demos/scene2 --policy text --out runs/scene2-text --resume\n"
+               "  robofollow eval --policy runs/scene2-text --out runs/eval-text "
+               "--scenes scene2", formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("dataset", metavar="DATASET", help="dataset folder")
+    p.add_argument("--policy", choices=("text", "blind", "form"),
+                   help="what the network reads of the instruction (default: text)")
+    p.add_argument("--out", required=True, metavar="CKPT", help="checkpoint folder (new, "
+                                                               "or the one to --resume)")
+    p.add_argument("--steps", type=_positive, help="training steps (default: 20000)")
+    p.add_argument("--batch", type=_positive, help="samples per step (default: 64)")
+    p.add_argument("--learning-rate", type=float, metavar="LR",
+                   help="Adam's peak learning rate (default: 0.001)")
+    p.add_argument("--seed", type=int, help="initialisation, order, augmentation and "
+                                            "held-out split (default: 0)")
+    p.add_argument("--cameras", type=_cameras, metavar="LIST",
+                   help="comma-separated cameras (default: cam_high)")
+    p.add_argument("--factor", type=_positive, help="shrink camera images by this factor "
+                                                    "(default: 4: 320x240 -> 80x60)")
+    p.add_argument("--shift", type=int, metavar="PX",
+                   help="random-shift augmentation in pixels (default: 4)")
+    p.add_argument("--chunk", type=_positive, help="actions predicted per query (default: 50)")
+    p.add_argument("--execute", type=_positive,
+                   help="actions of each chunk executed before the next query (default: 25)")
+    p.add_argument("--val-fraction", type=float, metavar="F",
+                   help="held-out demonstrations per task for the validation loss "
+                        "(default: 0.05)")
+    p.add_argument("--checkpoint-every", type=_positive, metavar="N",
+                   help="steps between checkpoints (default: 1000)")
+    p.add_argument("--episodes-per-task", type=_positive, metavar="N",
+                   help="train on the first N demonstrations of each task (default: all)")
+    p.add_argument("--variants-per-task", type=_positive, metavar="N",
+                   help="train only on episodes worded with one of each task's first N "
+                        "instructions (default: all)")
+    p.add_argument("--resume", action="store_true",
+                   help="continue the run in CKPT with its recorded options")
+    p.add_argument("--stop-at", type=_positive, metavar="STEP",
+                   help="stop (with a checkpoint) at this step; --resume goes on from there "
+                        "(splits a long run into sittings; the result is the same)")
+    p.add_argument("--no-cache", action="store_true",
+                   help="decode the videos without reading or writing the frame cache "
+                        "(~/.cache/robofollow/frames)")
+    p.add_argument("--quiet", action="store_true", help="no progress bars")
+    p.set_defaults(handler=cmd_train)
 
     p = commands.add_parser("dataset", help="dataset tools (check)",
                             description="Tools for generated datasets.")

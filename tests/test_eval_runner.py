@@ -145,7 +145,8 @@ def test_policies_load_by_name_or_module_factory_with_clear_errors():
     for spec, message in (("tests.test_eval_runner:missing", "has no callable 'missing'"),
                           ("no_such_module_xyz:f", "cannot import no_such_module_xyz"),
                           ("tests.test_eval_runner:not_a_policy", "is not a policy"),
-                          ("gpt", "expected one of expert, blind, noop, random, module:factory")):
+                          ("gpt", "expected one of expert, blind, noop, random, "
+                                  "baseline:NAME, a checkpoint folder, module:factory")):
         with pytest.raises(PolicyLoadError, match=message):
             load_policy(spec)
 

@@ -1,6 +1,7 @@
-"""Turning a --policy argument into a policy: a reference policy's name, `module:factory`
-(a callable returning a policy, imported from the Python path), `ws://host:port` (a server
-speaking openpi's websocket protocol) or `tcp://host:port` (upstream RoboFollow's protocol)."""
+"""Turning a --policy argument into a policy: a reference policy's name, a shipped baseline
+(`baseline:NAME`), a baseline checkpoint folder, `module:factory` (a callable returning a
+policy, imported from the Python path), `ws://host:port` (a server speaking openpi's websocket
+protocol) or `tcp://host:port` (upstream RoboFollow's protocol)."""
 
 from __future__ import annotations
 
@@ -26,11 +27,15 @@ def load_policy(spec: str) -> Policy:
         return REFERENCE_POLICIES[spec]()
     if is_server(spec):
         return _remote(spec)
+    from robofollow.learn import checkpoint, policy as baseline
+
+    if spec.startswith(baseline.PREFIX) or checkpoint.is_checkpoint(spec):
+        return baseline.load_baseline(spec)
     module_name, _, factory_name = spec.partition(":")
     if not module_name or not factory_name:
         raise PolicyLoadError(f"--policy {spec!r}: expected one of "
-                              f"{', '.join(REFERENCE_POLICIES)}, module:factory, ws://host:port or "
-                              "tcp://host:port")
+                              f"{', '.join(REFERENCE_POLICIES)}, baseline:NAME, a checkpoint folder, "
+                              "module:factory, ws://host:port or tcp://host:port")
     try:
         module = importlib.import_module(module_name)
     except ImportError as error:

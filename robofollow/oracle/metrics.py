@@ -4,6 +4,11 @@ Per scene x level: IS and ES are means over episodes; CR is the mean over tasks 
 completion rate (a task macro average; the episode micro average is kept too). Avg is the
 mean over the scene x level cells. Everything is reported on a 0-100 scale.
 
+Each cell also carries a 95% Wilson score interval for each metric ("ci95"): exact in kind
+for CR (binary outcomes; with equal rounds per task the macro average is the episode
+proportion), and conservative for IS and ES (per-episode scores in [0, 1] with mean p have a
+variance of at most p (1 - p), the binomial one).
+
 Episodes that carry references (an evaluation's `chance` and `followed_intent`) add their means
 to each cell: chance_IS / chance_CR (a language-blind guess) and followed_IS (perfectly
 following the instruction given), and their averages under "references".
@@ -38,12 +43,25 @@ def table(results: Iterable[Mapping]) -> dict:
             "CR": _percent(np.mean(done) for done in tasks.values()),
             "CR_micro": _percent(e["complete"] for e in episodes),
             "episodes": len(episodes), "tasks": len(tasks), **_references(episodes)}
+        cell = cells[scene][level]
+        cell["ci95"] = {m: wilson(cell[m] / 100, len(episodes)) for m in METRICS}
     flat = [cell for levels in cells.values() for cell in levels.values()]
     averages = {"avg": {m: _mean(flat, m) for m in METRICS}}
     shown = [m for m in REFERENCES if flat and all(m in c for c in flat)]
     if shown:
         averages["references"] = {m: _mean(flat, m) for m in shown}
     return {"cells": cells, **averages}
+
+
+def wilson(proportion: float, n: int, z: float = 1.959964) -> list[float]:
+    """The Wilson score interval of a proportion observed over n trials, on a 0-100 scale."""
+    if n <= 0:
+        return [0.0, 100.0]
+    p = min(1.0, max(0.0, proportion))
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z / (1 + z * z / n) * np.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    return [round(float(100 * max(0.0, centre - half)), 1),
+            round(float(100 * min(1.0, centre + half)), 1)]
 
 
 def _mean(cells: list[dict], key: str) -> float:

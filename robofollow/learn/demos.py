@@ -1,0 +1,194 @@
+"""Reading a RoboFollow LeRobot dataset (v2.1 or v3.0, as `robofollow generate` writes it) for
+training: every frame's joint state and action, each episode's instruction and task label, and
+the chosen cameras' frames, decoded with PyAV and shrunk by an integer factor (area average).
+
+Decoded frames are cached as .npy files keyed by the dataset's identity, so a second training
+run on the same dataset (or a resumed one) skips decoding.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
+
+import av
+import numpy as np
+import pyarrow as pa
+import pyarrow.parquet as pq
+
+from robofollow.data import lerobot_v21, lerobot_v30
+from robofollow.data.sinks import image_key
+from robofollow.errors import RoboFollowError
+
+
+class DatasetError(RoboFollowError):
+    """A training dataset that cannot be read."""
+
+
+@dataclass(frozen=True)
+class Demonstrations:
+    """A dataset's frames in episode order; episode e owns frames starts[e]:starts[e]+lengths[e]."""
+    states: np.ndarray  # [N, 14] float32
+    actions: np.ndarray  # [N, 14] float32
+    starts: np.ndarray  # [E] int64
+    lengths: np.ndarray  # [E] int64
+    instructions: list[str]  # per episode
+    labels: list[str]  # per episode: the training task
+    images: dict[str, np.ndarray]  # camera -> [N, H, W, 3] uint8
+
+    @property
+    def episodes(self) -> int:
+        return len(self.lengths)
+
+
+def downsample(images: np.ndarray, factor: int) -> np.ndarray:
+    """[..., H, W, 3] uint8 images shrunk by `factor` in each direction (area average,
+    rounded); the same function prepares training frames and a policy's observations."""
+    if factor == 1:
+        return np.ascontiguousarray(images, dtype=np.uint8)
+    height, width = images.shape[-3] // factor, images.shape[-2] // factor
+    total = np.zeros(images.shape[:-3] + (height, width, images.shape[-1]), np.uint16)
+    for row in range(factor):
+        for column in range(factor):
+            total += images[..., row::factor, column::factor, :][..., :height, :width, :]
+    return ((total + factor * factor // 2) // (factor * factor)).astype(np.uint8)
+
+
+def read_demonstrations(root: Path, cameras: tuple[str, ...], factor: int,
+                        progress=None, cache: Path | None = None) -> Demonstrations:
+    """The dataset under `root`; `progress(n)` is called as episodes' frames are decoded."""
+    info = _json(root / "meta" / "info.json")
+    version = info.get("codebase_version")
+    if version == lerobot_v21.VERSION:
+        episodes = _v21_episodes(root)
+    elif version == lerobot_v30.VERSION:
+        episodes = _v30_episodes(root)
+    else:
+        raise DatasetError(f"{root}: codebase_version {version!r} is not v2.1 or v3.0")
+    frames = _frames(root, info, episodes)
+    starts = np.cumsum([0] + [e["length"] for e in episodes[:-1]]).astype(np.int64)
+    lengths = np.array([e["length"] for e in episodes], np.int64)
+    if len(frames["index"]) != lengths.sum():
+        raise DatasetError(f"{root}: {len(frames['index'])} frames, the episodes list "
+                           f"{lengths.sum()}")
+    images = {camera: _camera(root, info, episodes, camera, factor, progress, cache)
+              for camera in cameras}
+    return Demonstrations(frames["state"], frames["action"], starts, lengths,
+                          [e["tasks"][0] for e in episodes],
+                          [e.get("label", e["tasks"][0]) for e in episodes], images)
+
+
+def _json(path: Path) -> dict:
+    try:
+        return json.loads(path.read_text())
+    except (OSError, ValueError) as error:
+        raise DatasetError(f"{path}: not a readable dataset file ({error})") from None
+
+
+def _v21_episodes(root: Path) -> list[dict]:
+    try:
+        lines = (root / "meta" / "episodes.jsonl").read_text().splitlines()
+        episodes = [json.loads(line) for line in lines if line.strip()]
+    except (OSError, ValueError) as error:
+        raise DatasetError(f"{root}/meta/episodes.jsonl: {error}") from None
+    return sorted(episodes, key=lambda e: e["episode_index"])
+
+
+def _v30_episodes(root: Path) -> list[dict]:
+    files = sorted((root / "meta" / "episodes").rglob("*.parquet"))
+    if not files:
+        raise DatasetError(f"{root}/meta/episodes: no parquet files")
+    try:
+        rows = pa.concat_tables([pq.read_table(f) for f in files]).to_pylist()
+    except (OSError, pa.ArrowException) as error:
+        raise DatasetError(f"{root}/meta/episodes: {error}") from None
+    return sorted(rows, key=lambda e: e["episode_index"])
+
+
+def _frames(root: Path, info: dict, episodes: list[dict]) -> dict[str, np.ndarray]:
+    files = sorted((root / "data").rglob("*.parquet"))
+    if not files:
+        raise DatasetError(f"{root}/data: no parquet files")
+    try:
+        table = pa.concat_tables(pq.read_table(f, columns=["observation.state", "action",
+                                                          "index"]) for f in files)
+    except (OSError, pa.ArrowException) as error:
+        raise DatasetError(f"{root}/data: {error}") from None
+    table = table.sort_by("index")
+
+    def vectors(name: str) -> np.ndarray:
+        column = table.column(name).combine_chunks()
+        return column.flatten().to_numpy().reshape(len(column), -1).astype(np.float32)
+
+    return {"state": vectors("observation.state"), "action": vectors("action"),
+            "index": table.column("index").to_numpy()}
+
+
+def _video_segments(root: Path, info: dict, episodes: list[dict], camera: str):
+    """(file, first frame, frame count) per episode for one camera."""
+    key, fps = image_key(camera), info["fps"]
+    for episode in episodes:
+        if info["codebase_version"] == lerobot_v21.VERSION:
+            chunk = episode["episode_index"] // info["chunks_size"]
+            name = info["video_path"].format(episode_chunk=chunk, video_key=key,
+                                             episode_index=episode["episode_index"])
+            yield root / name, 0, episode["length"]
+        else:
+            name = info["video_path"].format(
+                video_key=key, chunk_index=episode[f"videos/{key}/chunk_index"],
+                file_index=episode[f"videos/{key}/file_index"])
+            first = round(episode[f"videos/{key}/from_timestamp"] * fps)
+            yield root / name, first, episode["length"]
+
+
+def _camera(root: Path, info: dict, episodes: list[dict], camera: str, factor: int,
+            progress, cache: Path | None) -> np.ndarray:
+    if image_key(camera) not in info.get("features", {}):
+        raise DatasetError(f"{root}: no camera {camera!r} in the dataset")
+    path = None
+    if cache is not None:
+        identity = json.dumps([str(root.resolve()), info["total_frames"],
+                               info["total_episodes"], (root / "meta" / "info.json").stat()
+                               .st_mtime_ns, camera, factor])
+        path = cache / f"{hashlib.sha256(identity.encode()).hexdigest()[:16]}.npy"
+        if path.is_file():
+            if progress:
+                progress(len(episodes))
+            return np.load(path, mmap_mode="r")
+    segments = list(_video_segments(root, info, episodes, camera))
+    by_file: dict[Path, list[int]] = {}
+    for position, (file, _, _) in enumerate(segments):
+        by_file.setdefault(file, []).append(position)
+    parts: list[np.ndarray | None] = [None] * len(segments)
+    with ThreadPoolExecutor(max(1, min(4, os.cpu_count() or 1))) as pool:
+        for file, frames in zip(by_file, pool.map(lambda f: _decode(f, factor), by_file)):
+            for position in by_file[file]:  # a v3.0 file holds several episodes
+                _, first, count = segments[position]
+                if first + count > len(frames):
+                    raise DatasetError(f"{file}: {len(frames)} frames, episode "
+                                       f"{episodes[position]['episode_index']} needs frames "
+                                       f"{first}..{first + count - 1}")
+                parts[position] = frames[first:first + count]
+                if progress:
+                    progress(1)
+    result = np.concatenate(parts)
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        partial = path.with_suffix(".partial.npy")
+        np.save(partial, result)
+        partial.replace(path)
+    return result
+
+
+def _decode(file: Path, factor: int) -> np.ndarray:
+    """Every frame of a video, shrunk by `factor`."""
+    try:
+        with av.open(str(file)) as container:
+            return np.stack([downsample(frame.to_ndarray(format="rgb24"), factor)
+                             for frame in container.decode(video=0)])
+    except (OSError, ValueError, av.FFmpegError) as error:
+        raise DatasetError(f"{file}: cannot decode ({error})") from None
