@@ -701,7 +701,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="what the network reads of the instruction (default: text)")
     p.add_argument("--out", required=True, metavar="CKPT", help="checkpoint folder (new, "
                                                                "or the one to --resume)")
-    p.add_argument("--steps", type=_positive, help="training steps (default: 20000)")
+    p.add_argument("--steps", type=_positive, help="training steps (default: 10000)")
     p.add_argument("--batch", type=_positive, help="samples per step (default: 64)")
     p.add_argument("--learning-rate", type=float, metavar="LR",
                    help="Adam's peak learning rate (default: 0.001)")

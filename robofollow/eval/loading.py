@@ -34,8 +34,8 @@ def load_policy(spec: str) -> Policy:
     module_name, _, factory_name = spec.partition(":")
     if not module_name or not factory_name:
         raise PolicyLoadError(f"--policy {spec!r}: expected one of "
-                              f"{', '.join(REFERENCE_POLICIES)}, baseline:NAME, a checkpoint folder, "
-                              "module:factory, ws://host:port or tcp://host:port")
+                              f"{', '.join(REFERENCE_POLICIES)}, baseline:NAME, a checkpoint "
+                              "folder, module:factory, ws://host:port or tcp://host:port")
     try:
         module = importlib.import_module(module_name)
     except ImportError as error:

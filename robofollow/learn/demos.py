@@ -165,7 +165,8 @@ def _camera(root: Path, info: dict, episodes: list[dict], camera: str, factor: i
         by_file.setdefault(file, []).append(position)
     parts: list[np.ndarray | None] = [None] * len(segments)
     with ThreadPoolExecutor(max(1, min(4, os.cpu_count() or 1))) as pool:
-        for file, frames in zip(by_file, pool.map(lambda f: _decode(f, factor), by_file)):
+        decoded = pool.map(lambda file: _decode(file, factor), by_file)
+        for file, frames in zip(by_file, decoded, strict=True):
             for position in by_file[file]:  # a v3.0 file holds several episodes
                 _, first, count = segments[position]
                 if first + count > len(frames):
@@ -178,7 +179,7 @@ def _camera(root: Path, info: dict, episodes: list[dict], camera: str, factor: i
     result = np.concatenate(parts)
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
-        partial = path.with_suffix(".partial.npy")
+        partial = path.with_name(f"{path.stem}.{os.getpid()}.partial.npy")
         np.save(partial, result)
         partial.replace(path)
     return result

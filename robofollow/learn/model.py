@@ -62,7 +62,7 @@ def init(arch: Architecture, seed: int) -> dict[str, np.ndarray]:
     features = 0
     for camera in arch.cameras:
         fan_in = 3
-        for layer, (width, kernel) in enumerate(zip(arch.channels, arch.kernels)):
+        for layer, (width, kernel) in enumerate(zip(arch.channels, arch.kernels, strict=True)):
             shape = (kernel, kernel, fan_in, width)
             params[f"{camera}.conv{layer}.w"] = (rng.standard_normal(shape) * math.sqrt(
                 2.0 / (kernel * kernel * fan_in))).astype(np.float32)

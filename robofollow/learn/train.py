@@ -44,7 +44,7 @@ class TrainingError(RoboFollowError):
 class TrainOptions:
     dataset: str
     kind: str = "text"
-    steps: int = 20000
+    steps: int = 10000
     batch: int = 64
     learning_rate: float = 1e-3
     seed: int = 0
@@ -96,15 +96,21 @@ class Prepared:
 
 def prepare(options: TrainOptions, progress: bool = True, cache: Path | None = None
             ) -> Prepared:
+    """The dataset of `options`, read and arranged for training."""
     if options.kind not in KINDS:
         raise TrainingError(f"--policy {options.kind!r}: expected one of {', '.join(KINDS)}")
     root = Path(options.dataset)
     with tqdm(desc="decoding", unit="video", disable=not progress) as bar:
         demos = read_demonstrations(root, options.cameras, options.factor, bar.update, cache)
+    return arrange(demos, options)
+
+
+def arrange(demos: Demonstrations, options: TrainOptions) -> Prepared:
+    """Held-out split, vocabulary, tokens and normalisation of read demonstrations."""
     chosen = _chosen_episodes(demos, options)
     val, train = _split(demos, chosen, options)
     if not len(train):
-        raise TrainingError(f"{root}: no demonstrations left to train on")
+        raise TrainingError(f"{options.dataset}: no demonstrations left to train on")
     frame_episode = np.repeat(np.arange(demos.episodes), demos.lengths)
     frames = lambda episodes: np.concatenate(  # noqa: E731
         [np.arange(demos.starts[e], demos.starts[e] + demos.lengths[e]) for e in episodes]
@@ -127,7 +133,7 @@ def _chosen_episodes(demos: Demonstrations, options: TrainOptions) -> list[int]:
     """The episodes the options keep: the first N demonstrations of each task, and only those
     worded with one of its first M instructions (in the dataset's order)."""
     kept, per_task, wordings = [], {}, {}
-    for episode, (label, text) in enumerate(zip(demos.labels, demos.instructions)):
+    for episode, (label, text) in enumerate(zip(demos.labels, demos.instructions, strict=True)):
         known = wordings.setdefault(label, [])
         if text not in known:
             known.append(text)
@@ -221,17 +227,20 @@ def _jax():
     return jax, jnp
 
 
-def _functions(arch: Architecture, options: TrainOptions, total_steps: int):
+def _jax_conv(x, w, stride: int):
+    """The network's 'VALID' convolution in JAX (model.numpy_conv's twin)."""
+    jax, _ = _jax()
+    return jax.lax.conv_general_dilated(x, w, (stride, stride), "VALID",
+                                        dimension_numbers=("NHWC", "HWIO", "NHWC"))
+
+
+def compiled_steps(arch: Architecture, options: TrainOptions, total_steps: int):
     """Jitted (train step, validation loss)."""
     jax, jnp = _jax()
 
-    def conv(x, w, stride):
-        return jax.lax.conv_general_dilated(x, w, (stride, stride), "VALID",
-                                            dimension_numbers=("NHWC", "HWIO", "NHWC"))
-
     def loss(params, batch):
         predicted = forward(params, arch, batch["images"], batch["state"], batch["tokens"],
-                            xp=jnp, conv=conv)
+                            xp=jnp, conv=_jax_conv)
         return jnp.abs(predicted - batch["target"]).mean()
 
     def rate(step):
@@ -277,7 +286,7 @@ def train(options: TrainOptions, out: Path, resume: bool = False, progress: bool
         start, spent = 0, 0.0
         out.mkdir(parents=True, exist_ok=True)
         (out / "training.jsonl").write_text("")
-    step_fn, loss_fn = _functions(arch, options, options.steps)
+    step_fn, loss_fn = compiled_steps(arch, options, options.steps)
     batches = Batches(prepared, options)
     record = {"options": options.to_dict(), "episodes": int(prepared.train_episodes),
               "val_episodes": int(len(set(prepared.frame_episode[prepared.val_frames]))),
