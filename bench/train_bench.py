@@ -74,7 +74,7 @@ def measure(kind: str, cameras: tuple[str, ...], factor: int, steps: int, runs: 
         began = time.perf_counter()
         forward(numpy_params, arch, single, one["state"][:1], one["tokens"][:1])
         calls.append(time.perf_counter() - began)
-    cores = os.cpu_count() or 1
+    cores = len(os.sched_getaffinity(0))
     rate = statistics.median(rates)
     return {"kind": kind, "samples_per_s": round(rate, 1),
             "samples_per_s_per_core": round(rate / cores, 1), "cores": cores,

@@ -290,7 +290,7 @@ def train(options: TrainOptions, out: Path, resume: bool = False, progress: bool
     batches = Batches(prepared, options)
     record = {"options": options.to_dict(), "episodes": int(prepared.train_episodes),
               "val_episodes": int(len(set(prepared.frame_episode[prepared.val_frames]))),
-              "frames": int(len(prepared.train_frames)), "cores": os.cpu_count(),
+              "frames": int(len(prepared.train_frames)), "cores": len(os.sched_getaffinity(0)),
               "steps": start, "wall_seconds": spent, "val_loss": None, "loss": None}
 
     window: list[float] = []  # losses since the last report
