@@ -180,3 +180,20 @@ def test_wilson_intervals():
     assert wilson(1.0, 160)[1] == 100.0
     low, high = wilson(0.8, 160)
     assert low < 80 < high and high - low < 13
+
+
+def test_shipped_baselines_load_by_name():
+    from robofollow.eval.loading import load_policy
+    from robofollow.learn.policy import shipped_names
+
+    assert {"scene2-text", "scene2-blind"} <= set(shipped_names())
+    observation = {"state": np.zeros(14), "instruction": "Pick up the left cube.",
+                   "images": {"cam_high": np.full((240, 320, 3), 120, np.uint8)}}
+    for name in shipped_names():
+        policy = load_policy(f"baseline:{name}")
+        chunk = policy.act(observation)
+        assert chunk.shape == (policy.ckpt.execute, 14) and np.all(np.isfinite(chunk))
+        assert np.array_equal(chunk, policy.act(observation))
+        with pytest.raises(ValueError, match="whole multiple"):
+            policy.act({**observation, "images": {"cam_high": np.zeros((100, 100, 3),
+                                                                       np.uint8)}})
