@@ -267,25 +267,12 @@ def train(options: TrainOptions, out: Path, resume: bool = False, progress: bool
           cache: Path | None = None, stop_at: int | None = None) -> dict:
     """Train (or resume) into `out`, up to `stop_at` steps now if given (the rest is left for a
     resumed run); returns the training record of the last checkpoint."""
-    jax, jnp = _jax()
+    _jax()  # before the long decoding: say at once when the training stack is missing
     prepared = prepare(options, progress, cache)
     arch = Architecture(options.kind, tuple(options.cameras),
                         prepared.demos.images[options.cameras[0]].shape[1:3],
                         len(prepared.vocab), chunk=options.chunk)
-    if resume:
-        previous = checkpoint.load(out)
-        state = checkpoint.load_optimizer(out)
-        params = previous.params
-        moments = ({k[6:]: state[k] for k in state if k.startswith("first.")},
-                   {k[7:]: state[k] for k in state if k.startswith("second.")})
-        start, spent = int(state["step"]), float(previous.training["wall_seconds"])
-    else:
-        params = init(arch, options.seed)
-        moments = ({k: np.zeros_like(v) for k, v in params.items()},
-                   {k: np.zeros_like(v) for k, v in params.items()})
-        start, spent = 0, 0.0
-        out.mkdir(parents=True, exist_ok=True)
-        (out / "training.jsonl").write_text("")
+    params, moments, start, spent = _initial_state(arch, options, out, resume)
     step_fn, loss_fn = compiled_steps(arch, options, options.steps)
     batches = Batches(prepared, options)
     record = {"options": options.to_dict(), "episodes": int(prepared.train_episodes),
@@ -305,8 +292,8 @@ def train(options: TrainOptions, out: Path, resume: bool = False, progress: bool
         ckpt = checkpoint.Checkpoint(arch, prepared.vocab, prepared.normalization,
                                      options.execute, params_np, dict(record))
         optimizer = {"step": np.array(step)}
-        optimizer.update({f"first.{k}": np.asarray(v) for k, v in moments[0].items()})
-        optimizer.update({f"second.{k}": np.asarray(v) for k, v in moments[1].items()})
+        for name, moment in zip(("first", "second"), moments, strict=True):
+            optimizer.update({f"{name}.{k}": np.asarray(v) for k, v in moment.items()})
         checkpoint.save(out, ckpt, optimizer)
         _log(out, {"step": step, "loss": record["loss"], "val_loss": val,
                    "wall_seconds": round(record["wall_seconds"], 1)})
@@ -344,6 +331,21 @@ def train(options: TrainOptions, out: Path, resume: bool = False, progress: bool
         prefetch.stop()
     bar.close()
     return record
+
+
+def _initial_state(arch: Architecture, options: TrainOptions, out: Path, resume: bool):
+    """(parameters, Adam moments, first step, wall seconds spent): fresh, or from `out`."""
+    if resume:
+        previous, state = checkpoint.load(out), checkpoint.load_optimizer(out)
+        moments = tuple({k.split(".", 1)[1]: state[k] for k in state if k.startswith(f"{name}.")}
+                        for name in ("first", "second"))
+        return (previous.params, moments, int(state["step"]),
+                float(previous.training["wall_seconds"]))
+    params = init(arch, options.seed)
+    moments = tuple({k: np.zeros_like(v) for k, v in params.items()} for _ in range(2))
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "training.jsonl").write_text("")
+    return params, moments, 0, 0.0
 
 
 def _fmt(value) -> str:
