@@ -1,6 +1,7 @@
 """Training throughput and peak memory of each learned baseline on this machine's CPU.
 
     python bench/train_bench.py [--runs 3] [--steps 30] [--cameras cam_high] [--factor 4]
+                                [--kinds text,blind,form]
 
 Each baseline (text, blind, form) is measured in its own process: synthetic demonstrations of
 the dataset's shape (80 episodes of 150 frames, camera frames shrunk by --factor), one compiled
@@ -90,6 +91,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=30)
     parser.add_argument("--cameras", default="cam_high")
     parser.add_argument("--factor", type=int, default=4)
+    parser.add_argument("--kinds", default="text,blind,form")
     parser.add_argument("--one", help=argparse.SUPPRESS)  # measure one kind in this process
     args = parser.parse_args()
     cameras = tuple(args.cameras.split(","))
@@ -100,7 +102,7 @@ def main() -> None:
           f"median of {args.runs} runs of {args.steps} steps")
     print(f"{'baseline':<8} {'samples/s':>10} {'per core':>9} {'peak MiB':>9} "
           f"{'act() ms':>9} {'params':>9}")
-    for kind in ("text", "blind", "form"):
+    for kind in args.kinds.split(","):
         line = subprocess.run([sys.executable, __file__, "--one", kind, "--runs",
                                str(args.runs), "--steps", str(args.steps), "--cameras",
                                args.cameras, "--factor", str(args.factor)],

@@ -40,6 +40,8 @@ def test_wheel_ships_the_grammar_and_parses_when_installed(tmp_path):
     assert "robofollow/compiler/templates/english.j2" in names
     assert "robofollow/sim/templates/scene.xml.j2" in names
     assert {f"robofollow/specs/scene{i}.rf" for i in range(1, 5)} <= set(names)
+    assert {"robofollow/baselines/scene2-text/policy.json",
+            "robofollow/baselines/scene2-text/params.npz"} <= set(names)
     target = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--target",
                     str(target), str(wheel)], check=True, capture_output=True)
