@@ -330,7 +330,8 @@ def cmd_train(args) -> int:
     val = record["val_loss"]
     print(f"{out}: {options.kind} baseline, {record['steps']} of {options.steps} steps, loss {record['loss']:.4f}"
           + (f", validation loss {val:.4f}" if val is not None else "")
-          + f", {record['wall_seconds'] / 60:.1f} min on {record['cores']} cores")
+          + f", {record['wall_seconds'] / 60:.1f} min on {record['cores']} core"
+          + ("s" if record["cores"] != 1 else ""))
     print(f"evaluate it: robofollow eval --policy {out} --out runs/{out.name}")
     return 0
 
@@ -689,8 +690,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "cameras, the joint state and the instruction (text: its words; form: its "
                     "logical form; blind: nothing) predict chunks of joint targets (L1 loss). "
                     "Checkpoints go to OUT every --checkpoint-every steps and at the end; an "
-                    "interrupted run continues with --resume. OUT is then a policy: "
-                    "`robofollow eval --policy OUT`.",
+                    "interrupted run continues with --resume. CKPT is then a policy: "
+                    "`robofollow eval --policy CKPT`.",
         epilog="examples:\n  robofollow generate --out demos/scene2 --tasks scene2\n  "
                "robofollow train demos/scene2 --policy text --out runs/scene2-text\n  "
                "robofollow train demos/scene2 --policy text --out runs/scene2-text --resume\n"

@@ -144,6 +144,12 @@ def test_training_options_are_checked(dataset, tmp_path, capsys):
     assert main(["train", str(tmp_path / "missing"), "--out", str(tmp_path / "a"),
                  "--quiet"]) == 1
     assert "not a readable dataset file" in capsys.readouterr().err
+    for option, value, message in (("--val-fraction", "0.9", "within 0..0.5"),
+                                   ("--execute", "60", "more than the 50 actions")):
+        assert main(["train", str(dataset), "--out", str(tmp_path / "a"), option, value,
+                     "--quiet"]) == 1
+        assert message in capsys.readouterr().err
+    assert not (tmp_path / "a").exists()
     ckpt = tmp_path / "b"
     assert main(["train", str(dataset), "--out", str(ckpt), "--steps", "2", "--batch", "4",
                  "--factor", "1", "--quiet", "--no-cache"]) == 0

@@ -61,6 +61,20 @@ class TrainOptions:
     def to_dict(self) -> dict:
         return asdict(self)
 
+    def check(self) -> None:
+        """TrainingError naming the first option out of its range."""
+        problems = [(self.kind in KINDS, f"--policy {self.kind!r}: expected one of "
+                                         f"{', '.join(KINDS)}"),
+                    (self.learning_rate > 0, "--learning-rate must be positive"),
+                    (0 <= self.val_fraction <= 0.5, "--val-fraction must be within 0..0.5"),
+                    (self.shift >= 0, "--shift must be 0 or more pixels"),
+                    (self.execute <= self.chunk, f"--execute {self.execute} is more than the "
+                                                 f"{self.chunk} actions of a chunk"),
+                    (len(self.cameras) > 0, "--cameras names no camera")]
+        for ok, message in problems:
+            if not ok:
+                raise TrainingError(message)
+
 
 def resumed_options(out: Path, dataset: Path, given: dict) -> TrainOptions:
     """The options recorded in the checkpoint at `out`; options given again must agree."""
@@ -97,8 +111,7 @@ class Prepared:
 def prepare(options: TrainOptions, progress: bool = True, cache: Path | None = None
             ) -> Prepared:
     """The dataset of `options`, read and arranged for training."""
-    if options.kind not in KINDS:
-        raise TrainingError(f"--policy {options.kind!r}: expected one of {', '.join(KINDS)}")
+    options.check()
     root = Path(options.dataset)
     with tqdm(desc="decoding", unit="video", disable=not progress) as bar:
         demos = read_demonstrations(root, options.cameras, options.factor, bar.update, cache)
