@@ -3,7 +3,9 @@
     python bench/train_bench.py [--runs 3] [--steps 30] [--cameras cam_high] [--factor 4]
                                 [--kinds text,blind,form]
 
-Each baseline (text, blind, form) is measured in its own process: synthetic demonstrations of
+Each baseline (text, blind, form) is measured in its own process, pinned to one core and then
+on all of them (XLA gains little from a second core, so two trainings side by side use a
+2-core machine fully): synthetic demonstrations of
 the dataset's shape (80 episodes of 150 frames, camera frames shrunk by --factor), one compiled
 training step (batch 64) timed over --steps steps after a warm-up, --runs times. Reports the
 median samples/s, samples/s per core, peak resident memory of the process, and the time of one
@@ -93,23 +95,27 @@ def main() -> None:
     parser.add_argument("--factor", type=int, default=4)
     parser.add_argument("--kinds", default="text,blind,form")
     parser.add_argument("--one", help=argparse.SUPPRESS)  # measure one kind in this process
+    parser.add_argument("--pin", type=int, help=argparse.SUPPRESS)  # on this many cores
     args = parser.parse_args()
     cameras = tuple(args.cameras.split(","))
     if args.one:
+        os.sched_setaffinity(0, sorted(os.sched_getaffinity(0))[:args.pin])
         print(json.dumps(measure(args.one, cameras, args.factor, args.steps, args.runs)))
         return
     print(f"cameras {args.cameras}, images {320 // args.factor}x{240 // args.factor}, batch 64, "
           f"median of {args.runs} runs of {args.steps} steps")
-    print(f"{'baseline':<8} {'samples/s':>10} {'per core':>9} {'peak MiB':>9} "
+    print(f"{'baseline':<8} {'cores':>5} {'samples/s':>10} {'per core':>9} {'peak MiB':>9} "
           f"{'act() ms':>9} {'params':>9}")
     for kind in args.kinds.split(","):
-        line = subprocess.run([sys.executable, __file__, "--one", kind, "--runs",
-                               str(args.runs), "--steps", str(args.steps), "--cameras",
-                               args.cameras, "--factor", str(args.factor)],
-                              check=True, capture_output=True, text=True).stdout
-        r = json.loads(line.strip().splitlines()[-1])
-        print(f"{kind:<8} {r['samples_per_s']:>10} {r['samples_per_s_per_core']:>9} "
-              f"{r['peak_memory_mib']:>9} {r['inference_ms']:>9} {r['parameters']:>9}")
+        for pin in sorted({1, len(os.sched_getaffinity(0))}):
+            line = subprocess.run([sys.executable, __file__, "--one", kind, "--pin", str(pin),
+                                   "--runs", str(args.runs), "--steps", str(args.steps),
+                                   "--cameras", args.cameras, "--factor", str(args.factor)],
+                                  check=True, capture_output=True, text=True).stdout
+            r = json.loads(line.strip().splitlines()[-1])
+            print(f"{kind:<8} {r['cores']:>5} {r['samples_per_s']:>10} "
+                  f"{r['samples_per_s_per_core']:>9} {r['peak_memory_mib']:>9} "
+                  f"{r['inference_ms']:>9} {r['parameters']:>9}")
 
 
 if __name__ == "__main__":
