@@ -56,6 +56,24 @@ def test_the_served_expert_scores_as_the_in_process_expert(stage):
     np.testing.assert_array_equal(remote.trajectory.action, local.trajectory.action)
 
 
+@pytest.mark.slow
+def test_a_served_baseline_checkpoint_acts_as_the_in_process_one(stage):
+    from robofollow.eval.loading import load_policy
+
+    record = episode(EPISODE)
+    local = run_episode(benchmark(), stage, record, load_policy("baseline:scene2-text"))
+    uri, server = _start(PolicyServer(benchmark(), "baseline:scene2-text").handle)
+    try:
+        remote_policy = WebsocketPolicy(uri)
+        remote = run_episode(benchmark(), stage, record, remote_policy)
+        remote_policy.close()
+    finally:
+        server.shutdown()
+    assert remote.error is None and local.error is None
+    assert remote.score == local.score
+    np.testing.assert_allclose(remote.trajectory.action, local.trajectory.action, atol=1e-6)
+
+
 def _openpi_like(seen: list):
     """A server written from the protocol description only: metadata first, then one reply
     {"actions": [H, 14]} per observation; it holds the observed state for 10 steps."""
