@@ -308,11 +308,13 @@ def cmd_generate(args) -> int:
 
 
 def cmd_train(args) -> int:
+    from dataclasses import fields
+
     from robofollow.learn.train import TrainOptions, default_cache, resumed_options, train
 
     out = Path(args.out)
-    given = {name: getattr(args, name) for name in TRAIN_OPTIONS
-             if getattr(args, name) is not None}
+    tunable = [f.name for f in fields(TrainOptions) if f.name not in ("dataset", "kind")]
+    given = {name: getattr(args, name) for name in tunable if getattr(args, name) is not None}
     if args.policy is not None:
         given["kind"] = args.policy
     if args.resume:
@@ -328,17 +330,13 @@ def cmd_train(args) -> int:
     except OSError as error:
         raise RoboFollowError(f"cannot write the checkpoint in {out}: {error}") from None
     val = record["val_loss"]
-    print(f"{out}: {options.kind} baseline, {record['steps']} of {options.steps} steps, loss {record['loss']:.4f}"
+    print(f"{out}: {options.kind} baseline, {record['steps']} of {options.steps} steps, "
+          f"loss {record['loss']:.4f}"
           + (f", validation loss {val:.4f}" if val is not None else "")
           + f", {record['wall_seconds'] / 60:.1f} min on {record['cores']} core"
           + ("s" if record["cores"] != 1 else ""))
     print(f"evaluate it: robofollow eval --policy {out} --out runs/{out.name}")
     return 0
-
-
-TRAIN_OPTIONS = ("steps", "batch", "learning_rate", "seed", "cameras", "factor", "shift",
-                 "chunk", "execute", "val_fraction", "checkpoint_every", "episodes_per_task",
-                 "variants_per_task")
 
 
 def cmd_dataset_check(args) -> int:

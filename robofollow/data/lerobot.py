@@ -103,13 +103,19 @@ def frame_table(episode: Episode, arrays: dict[str, np.ndarray], start: int) -> 
     return pa.table(columns)
 
 
+def vectors(column: pa.ChunkedArray) -> np.ndarray:
+    """A fixed-size-list column (state, action) as an [N, D] array."""
+    column = column.combine_chunks()
+    return column.flatten().to_numpy().reshape(len(column), -1)
+
+
 def episode_stats(episode: Episode, table: pa.Table) -> dict[str, dict]:
     """Statistics of every feature of one episode (images from the unit's running stats)."""
     stats = {}
     for name in table.column_names:
-        column = table.column(name).combine_chunks()
+        column = table.column(name)
         if pa.types.is_fixed_size_list(column.type):
-            values = column.flatten().to_numpy().reshape(len(column), -1)
+            values = vectors(column)
         else:
             values = column.to_numpy()
         stats[name] = array_stats(values)

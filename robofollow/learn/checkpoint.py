@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
+from robofollow.data.files import write_json_atomic
 from robofollow.errors import RoboFollowError
 from robofollow.learn.model import Architecture
 
@@ -56,8 +57,7 @@ def save(folder: Path, checkpoint: Checkpoint, optimizer: dict[str, np.ndarray] 
     _atomic(folder / "params.npz", lambda f: np.savez(f, **checkpoint.params))
     if optimizer is not None:
         _atomic(folder / "optimizer.npz", lambda f: np.savez(f, **optimizer))
-    text = json.dumps(checkpoint.meta(), indent=1) + "\n"
-    _atomic(folder / "policy.json", lambda f: f.write(text.encode()))
+    write_json_atomic(folder / "policy.json", checkpoint.meta())
 
 
 def load(folder: Path) -> Checkpoint:

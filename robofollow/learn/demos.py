@@ -21,6 +21,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from robofollow.data import lerobot_v21, lerobot_v30
+from robofollow.data.lerobot import vectors
 from robofollow.data.sinks import image_key
 from robofollow.errors import RoboFollowError
 
@@ -69,7 +70,7 @@ def read_demonstrations(root: Path, cameras: tuple[str, ...], factor: int,
         episodes = _v30_episodes(root)
     else:
         raise DatasetError(f"{root}: codebase_version {version!r} is not v2.1 or v3.0")
-    frames = _frames(root, info, episodes)
+    frames = _frames(root)
     starts = np.cumsum([0] + [e["length"] for e in episodes[:-1]]).astype(np.int64)
     lengths = np.array([e["length"] for e in episodes], np.int64)
     if len(frames["index"]) != lengths.sum():
@@ -109,7 +110,7 @@ def _v30_episodes(root: Path) -> list[dict]:
     return sorted(rows, key=lambda e: e["episode_index"])
 
 
-def _frames(root: Path, info: dict, episodes: list[dict]) -> dict[str, np.ndarray]:
+def _frames(root: Path) -> dict[str, np.ndarray]:
     files = sorted((root / "data").rglob("*.parquet"))
     if not files:
         raise DatasetError(f"{root}/data: no parquet files")
@@ -119,12 +120,8 @@ def _frames(root: Path, info: dict, episodes: list[dict]) -> dict[str, np.ndarra
     except (OSError, pa.ArrowException) as error:
         raise DatasetError(f"{root}/data: {error}") from None
     table = table.sort_by("index")
-
-    def vectors(name: str) -> np.ndarray:
-        column = table.column(name).combine_chunks()
-        return column.flatten().to_numpy().reshape(len(column), -1).astype(np.float32)
-
-    return {"state": vectors("observation.state"), "action": vectors("action"),
+    return {"state": vectors(table.column("observation.state")).astype(np.float32),
+            "action": vectors(table.column("action")).astype(np.float32),
             "index": table.column("index").to_numpy()}
 
 
