@@ -13,10 +13,11 @@ import math
 
 import numpy as np
 
+from robofollow.compiler import workspace
 from robofollow.compiler.behaviour import Behaviour, Step
 from robofollow.compiler.plans import (CLOSED, LIFT, OPEN, PRE_GRASP, PRE_PLACE, PUSH_HEIGHT,
                                        PUSH_SPEED, RETREAT, STACK_CLEARANCE, TABLE_CLEARANCE,
-                                       PlanPoint, Plan, plan, push_points)
+                                       Plan, PlanPoint, plan, push_points)
 from robofollow.oracle.results import EpisodeScore
 from robofollow.scoring import score_recording
 from robofollow.sim import robot
@@ -80,18 +81,18 @@ class Script:
     def move(self, arm: str, position, gripper: float | None = None,
              yaw: float = 0.0) -> "Script":
         if gripper is None:
-            gripper = float(self.command[7 * robot.ARMS.index(arm) + 6])
+            gripper = float(self.command[7 * workspace.ARMS.index(arm) + 6])
         return self.points([PlanPoint(name="move", arm=arm, position=tuple(position),
                                       gripper=gripper, yaw_degrees=yaw)])
 
     def home(self, arm: str, gripper: float | None = None) -> "Script":
         if gripper is None:
-            gripper = float(self.command[7 * robot.ARMS.index(arm) + 6])
+            gripper = float(self.command[7 * workspace.ARMS.index(arm) + 6])
         return self.points([PlanPoint(name="home", arm=arm, position=None, gripper=gripper)])
 
     def grip(self, arm: str, opening: float) -> "Script":
         """Set the gripper command where the arm is."""
-        index = 7 * robot.ARMS.index(arm) + 6
+        index = 7 * workspace.ARMS.index(arm) + 6
         for value in np.linspace(self.command[index], opening, 11)[1:]:
             self.command[index] = value
             self.actions.append(self.command.copy())
@@ -142,7 +143,7 @@ class Script:
 
     def shake(self, arm: str, amplitude: float, times: int) -> "Script":
         """Wave the gripper side to side around where it is (the arm's home, say)."""
-        index = slice(7 * robot.ARMS.index(arm), 7 * robot.ARMS.index(arm) + 6)
+        index = slice(7 * workspace.ARMS.index(arm), 7 * workspace.ARMS.index(arm) + 6)
         centre = self.command[index].copy()
         for phase in np.linspace(0, 2 * math.pi * times, 12 * times):
             self.command[index] = centre + np.array([amplitude * math.sin(phase), 0, 0, 0, 0, 0])

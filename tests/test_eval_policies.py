@@ -8,6 +8,7 @@ import time
 import numpy as np
 import pytest
 
+from robofollow.compiler import workspace
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
 from robofollow.eval.chance import references
@@ -103,7 +104,7 @@ def test_every_paraphrase_a_shuffled_episode_can_give_is_understood_with_every_a
                 except RoboFollowError:  # names an object this layout lacks: the expert holds
                     continue
                 understood_count += 1
-                assert all(step.arm in robot.ARMS for step in behaviour.steps), (layout, text)
+                assert all(step.arm in workspace.ARMS for step in behaviour.steps), (layout, text)
     assert understood_count > 1000
 
 

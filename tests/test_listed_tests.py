@@ -56,7 +56,8 @@ def test_a_listed_test_is_audited_like_a_generated_one(tmp_path, capsys):
     assert main(["audit", str(folder)]) == 1
     text = capsys.readouterr().out
     assert "scene2/L2/copied: its form is a training form" in text
-    assert "scene2/L2/other_arm: no training task performs this behaviour" in text
+    assert "scene2/L2/other_arm: pick right large_red_cylinder: no training step moves alike" \
+        in text and "new arm: the right arm (trained: the left arm)" in text
 
 
 def test_what_would_stop_a_candidate_is_an_error_at_the_test(tmp_path, capsys):

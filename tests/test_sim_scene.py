@@ -6,6 +6,7 @@ import mujoco
 import numpy as np
 import pytest
 
+from robofollow.compiler import workspace
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES, Cameras
@@ -34,7 +35,7 @@ def test_every_layout_builds_and_settles(scene, layout):
 
 def test_robot_has_the_viperx_joint_limits():
     sim = Simulation(benchmark().spec.scenes["scene1"], "default")
-    for arm in robot.ARMS:
+    for arm in workspace.ARMS:
         for name, low, high in zip(robot.ARM_JOINTS, robot.JOINT_LOW, robot.JOINT_HIGH, strict=True):
             joint = sim.model.joint(f"{arm}/{name}")
             assert tuple(joint.range) == pytest.approx((low, high))

@@ -7,7 +7,9 @@ import pytest
 from robofollow.compiler import lf
 from robofollow.compiler.parser import parse
 from robofollow.compiler.spec_loader import load_spec
-from robofollow.compiler.splits import episode_seed, generate, passes_over, signature
+from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
+from robofollow.compiler.routes import passes_over
+from robofollow.compiler.splits import episode_seed, generate
 from robofollow.compiler.training import check_training
 from robofollow.compiler.wordings import concepts
 from robofollow.compiler.world import World
@@ -51,10 +53,11 @@ def test_novel_wordings_mean_their_form_and_are_new(compiled):
 
 def test_kept_tasks_are_inside_the_repertoire_and_unique(compiled):
     spec, training, splits = compiled
+    repertoires = {scene.id: Repertoire(scene, training) for scene in spec.scenes.values()}
     for task in splits.tasks:
-        scene = spec.scenes[task.scene]
-        repertoire = {signature(training[t.label], World(scene, t.layout)) for t in scene.tasks}
-        assert signature(task.behaviour, World(scene, task.layout)) in repertoire
+        world = World(spec.scenes[task.scene], task.layout)
+        assert repertoires[task.scene].covers(task.behaviour, world,
+                                              compose=task.level in COMPOSING_LEVELS), task.id
     assert len({t.id for t in splits.tasks}) == len(splits.tasks)
     assert len({(t.layout, lf.to_json(t.form)) for t in splits.tasks}) == len(splits.tasks)
 
@@ -75,7 +78,7 @@ def test_every_rejection_says_why(compiled):
     assert {"no-referent", "ambiguous", "outside the training repertoire",
             "a training task has this form"} <= reasons
     assert any(r.reason.startswith("over the split's max") for r in splits.rejected)
-    off_way = [r for r in splits.rejected if "no longer on the way" in r.reason]
+    off_way = [r for r in splits.rejected if r.reason.startswith("degenerate route")]
     assert off_way and all(r.layout == "scene3_3" or r.layout == "scene3_4" for r in off_way)
 
 

@@ -75,8 +75,10 @@ def test_every_kind_of_finding_is_reported(findings):
                             "yellow_block_1, green_sphere"),
     ("swapped", "expectation", "the words select target yellow_bowl; the expectation says "
                                "green_bowl"),
-    ("other-arm", "repertoire", "pick right large_red_cylinder: training does this only with "
-                                "the left arm"),
+    ("other-arm", "repertoire", "pick right large_red_cylinder: no training step moves alike; "
+                                "against the nearest, pickup_red_cylinder (pick left "
+                                "large_red_cylinder on default), new arm: the right arm "
+                                "(trained: the left arm)"),
     ("copied", "leakage", "its form is a training form"),
     ("new-layout-l2", "level", "an L2 task is on a training layout"),
     ("rephrased-l1", "level", "an L1 task's instruction is a training instruction"),
@@ -109,7 +111,7 @@ def test_the_cli_exports_audits_and_groups_findings(tmp_path, capsys):
     exported = tmp_path / "tasks.jsonl"
     assert main(["audit", specs, "--export-tasks", str(exported), "--tasks",
                  str(exported)]) == 0
-    assert "710 tasks checked, no findings" in capsys.readouterr().out
+    assert "698 tasks checked, no findings" in capsys.readouterr().out
     listed = tmp_path / "mine.jsonl"
     listed.write_text("".join(json.dumps(t) + "\n" for t in TASKS[:3]))
     assert main(["audit", specs, "--tasks", str(listed)]) == 1

@@ -14,7 +14,7 @@ from typing import Literal
 
 from robofollow.compiler.behaviour import Behaviour, Step
 from robofollow.compiler.model import Model
-from robofollow.compiler.splits import passes_over
+from robofollow.compiler.routes import passes_over
 from robofollow.compiler.world import DIRECTIONS, RELATION_RANGE, World, in_cone
 
 PRE_GRASP = 0.08  # m: approach height above the grasp point

@@ -7,9 +7,9 @@
   logical form no training instruction has, said in words training instructions use.
 - L3: the kept L1 tasks reworded the same way on their changed layouts.
 
-A behaviour is inside the repertoire when some training task of the scene performs the same
-steps (arm, action, source, relation, target, bodies passed over, final yaw) and every route
-waypoint still lies on the way from the source to the destination, as it does in training.
+A behaviour is inside the repertoire when training performs its motions (motions.py), and its
+route, if any, is on the way (routes.py). L1 and L3 layouts must look different from every
+training layout (observation.py).
 """
 
 from __future__ import annotations
@@ -17,16 +17,16 @@ from __future__ import annotations
 import hashlib
 
 from robofollow.compiler import lf
-from robofollow.compiler.behaviour import Behaviour, Step
+from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import Grounder, GroundingError, instability
 from robofollow.compiler.model import Model
+from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
+from robofollow.compiler.observation import look_alike
 from robofollow.compiler.realize import STYLES, realize
+from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import Level, Scene, Spec
-from robofollow.compiler.training import describe
 from robofollow.compiler.wordings import GENERATORS, Describer, concepts
-from robofollow.compiler.world import World, jitter_worlds
-
-ROUTE_CORRIDOR = 0.03  # m: a waypoint may lie this far outside the source-destination x span
+from robofollow.compiler.world import jitter_worlds
 
 
 class TestTask(Model):
@@ -58,54 +58,10 @@ class Splits(Model):
         return [t for t in self.tasks if t.scene == scene and t.level == level]
 
 
-def passes_over(step: Step, world: World) -> tuple[str, ...]:
-    """The bodies the carried object is routed over: each 'via' body, and for 'avoid X' the
-    other body on the way in X's column (the detour the words ask for)."""
-    over = set()
-    for mode, body in step.waypoints:
-        if mode == "via":
-            over.add(body)
-            continue
-        over.update(world.column_mates(body, excluding=(step.source, step.target)))
-    return tuple(sorted(over))
-
-
-def signature(behaviour: Behaviour, world: World) -> tuple:
-    """What the repertoire compares: the steps performed, routes as the bodies passed over
-    (not the words, not the branch)."""
-    return tuple((s.arm, s.action, s.source, s.relation, s.target, passes_over(s, world),
-                  s.yaw_degrees) for s in behaviour.steps)
-
-
-def repertoire(scene: Scene, training: dict[str, Behaviour]) -> set[tuple]:
-    """The signatures of a scene's training behaviours, each on its own layout."""
-    return {signature(training[t.label], World(scene, t.layout)) for t in scene.tasks}
-
-
-def training_arm(behaviour: Behaviour, index: int, world: World,
-                 known: set[tuple]) -> str | None:
-    """The one arm the repertoire `known` performs step `index` of `behaviour` with (all but
-    the arm equal), or None when it has none or both."""
-    steps = behaviour.steps
-    rest = signature(Behaviour(steps=(steps[index],)), world)[0][1:]
-    arms = {entry[index][0] for entry in known
-            if len(entry) == len(steps) and entry[index][1:] == rest}
-    return arms.pop() if len(arms) == 1 else None
-
-
 def episode_seed(task_id: str, round_index: int, base: int) -> int:
     """The seed of a task's round: fixed by the task id, the round and the split's seed base."""
     offset = int(hashlib.sha256(task_id.encode()).hexdigest()[:8], 16) % 1000
     return base + 100 * round_index + offset
-
-
-def off_route(step: Step, world: World) -> list[str]:
-    """Waypoints that no longer lie between the source and the destination (in x)."""
-    if not step.waypoints:
-        return []
-    x_source, x_target = world.poses[step.source].x, world.poses[step.target].x
-    low, high = min(x_source, x_target) - ROUTE_CORRIDOR, max(x_source, x_target) + ROUTE_CORRIDOR
-    return [body for _, body in step.waypoints if not low <= world.poses[body].x <= high]
 
 
 def _variants(form: lf.Instruction, describer: Describer, wordings: tuple[str, ...]):
@@ -129,7 +85,7 @@ class _Generator:
         self.training = training
         self.training_forms = training_forms
         self.vocabulary = vocabulary
-        self.repertoire = repertoire(scene, training)
+        self.repertoire = Repertoire(scene, training)
         self.tasks: list[TestTask] = []
         self.rejected: list[Rejection] = []
         self.seen: dict[tuple[str, str], str] = {}
@@ -164,20 +120,21 @@ class _Generator:
         except GroundingError as error:
             self.reject(level, layout, instruction, origin, f"{error.code}: {error.message}")
             return
-        if signature(behaviour, world) not in self.repertoire:
+        degenerate = [p for step in behaviour.steps for p in degenerate_routes(step, world)]
+        if degenerate:
             self.reject(level, layout, instruction, origin,
-                        f"outside the training repertoire: {describe(behaviour)}")
+                        f"degenerate route: {'; '.join(degenerate)}")
+            return
+        missing = self.repertoire.missing(behaviour, world, compose=level in COMPOSING_LEVELS)
+        if missing:
+            self.reject(level, layout, instruction, origin,
+                        f"outside the training repertoire: {missing}")
             return
         covered = [f"{b} rests on {s.source}" for s in behaviour.steps
                    for b in world.carried_by(s.source)]
         if covered:
             self.reject(level, layout, instruction, origin, f"the object to move is covered "
                         f"({', '.join(covered)}); no training task moves a stack")
-            return
-        stray = [b for step in behaviour.steps for b in off_route(step, world)]
-        if stray:
-            self.reject(level, layout, instruction, origin,
-                        f"waypoint {', '.join(stray)} is no longer on the way")
             return
         unstable = instability(form, self.grounders_of(layout)[1:], behaviour, first_case=1)
         if unstable:
@@ -204,7 +161,13 @@ class _Generator:
     def level1(self) -> None:
         rule = self.scene.splits.get("L1")
         for layout in rule.layouts if rule else ():
+            same = look_alike(self.scene, layout, self.scene.training_layouts)
             for task in self.scene.tasks:
+                if same is not None:
+                    self.reject("L1", layout, task.paraphrases[0], task.label,
+                                f"{layout} looks the same as the training layout {same} "
+                                "(identical-looking bodies swapped at most)")
+                    continue
                 self.consider("L1", layout, task.paraphrases[0], task.forms[0], task.label,
                               "training")
 

@@ -15,12 +15,13 @@ from __future__ import annotations
 
 import numpy as np
 
+from robofollow.compiler import workspace
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import ground
+from robofollow.compiler.motions import Repertoire
 from robofollow.compiler.parser import parse
 from robofollow.compiler.plans import plan
 from robofollow.compiler.spec import Scene
-from robofollow.compiler.splits import repertoire, training_arm
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
 from robofollow.eval.policy import Privileged
@@ -71,15 +72,15 @@ def understood(instruction: str, world: World, scene: Scene,
     behaviour = ground(parse(instruction), world)
     if all(step.arm for step in behaviour.steps):
         return behaviour
-    known = repertoire(scene, training)
+    known = Repertoire(scene, training)
     steps = tuple(step if step.arm else step.model_copy(update={
-        "arm": training_arm(behaviour, index, world, known) or _nearer_arm(world, step.source)})
+        "arm": known.arm_for(behaviour, index, world) or _nearer_arm(world, step.source)})
         for index, step in enumerate(behaviour.steps))
     return behaviour.model_copy(update={"steps": steps})
 
 
 def _nearer_arm(world: World, body: str) -> str:
-    return min(robot.ARMS, key=lambda arm: abs(world.poses[body].x - robot.BASE_XY[arm][0]))
+    return min(workspace.ARMS, key=lambda arm: abs(world.poses[body].x - workspace.BASE_XY[arm][0]))
 
 
 class ExpertPolicy(_Scripted):

@@ -3,10 +3,13 @@
 - scene entropy H(T|S) over the training groups;
 - leakage: no test (layout, form) pair is a training pair, no L2/L3 form is a training form,
   no instruction names a spec identifier;
-- level consistency: L0 tasks are training pairs, L1 tasks training instructions on layouts no
-  training task uses, L2 tasks on training layouts, L3 tasks on non-training layouts;
-- repertoire: every test behaviour is performed by some training task (recomputed here,
-  independently of generation);
+- level consistency: L0 tasks are training pairs, L1 tasks training instructions on layouts
+  that look different from every training layout, L2 tasks on training layouts, L3 tasks on
+  layouts that look different (observation.py: by appearance and position, not names);
+- repertoire: training performs every test behaviour's motions, as a whole for L0 and L1,
+  step by step for L2 and L3 (motions.py; recomputed here, independently of generation);
+- routes: every body a route names is on the way from the source to the destination
+  (routes.py);
 - ambiguity: every instruction grounds to one and the same behaviour on its layout at the
   nominal positions and with the jitter at its extremes.
 """
@@ -19,8 +22,11 @@ from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import Grounder, instability
 from robofollow.compiler.lexicon import VOCABULARY
+from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
+from robofollow.compiler.observation import look_alike
+from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import Spec
-from robofollow.compiler.splits import Splits, repertoire, signature
+from robofollow.compiler.splits import Splits
 from robofollow.compiler.world import World, jitter_worlds
 from robofollow.oracle.entropy import entropy_bits, scene_groups
 
@@ -42,7 +48,7 @@ class TrainingFacts:
         self.pairs = {(t.scene, t.layout, lf.to_json(f)) for t in spec.tasks for f in t.forms}
         self.forms = {form for _, _, form in self.pairs}
         self.instructions = {p for t in spec.tasks for p in t.paraphrases}
-        self.layouts = {(t.scene, t.layout) for t in spec.tasks}
+        self.spec = spec
         identifiers = sorted(_identifiers(spec), key=len, reverse=True)
         self.pattern = re.compile(r"\b(" + "|".join(map(re.escape, identifiers)) + r")\b",
                                   re.IGNORECASE) if identifiers else None
@@ -61,20 +67,21 @@ class TrainingFacts:
 
     def level_problems(self, level: str, scene: str, layout: str, form: str,
                        instruction: str) -> list[str]:
-        on_training_layout = (scene, layout) in self.layouts
+        scene_spec = self.spec.scenes[scene]
+        same = look_alike(scene_spec, layout, scene_spec.training_layouts)
         found = []
         if level == "L0" and (scene, layout, form) not in self.pairs:
             found.append("an L0 task is a training pair, but no training task asks this on "
                          f"{layout}")
-        if level in ("L1", "L3") and on_training_layout:
-            found.append(f"an {level} task is on a layout no training task uses, but training "
-                         f"tasks use {layout}")
+        if level in ("L1", "L3") and same is not None:
+            found.append(f"an {level} task is on a layout that looks different from every "
+                         f"training layout, but {layout} looks the same as {same}")
         if level == "L1" and instruction not in self.instructions:
             found.append("an L1 task's instruction is a training instruction, but this one is "
                          "not")
-        if level == "L2" and not on_training_layout:
-            found.append(f"an L2 task is on a training layout, but no training task uses "
-                         f"{layout}")
+        if level == "L2" and same is None:
+            found.append(f"an L2 task is on a training layout, but {layout} looks different "
+                         "from every training layout")
         return found
 
 
@@ -97,13 +104,20 @@ def repertoire_violations(spec: Spec, training: dict[str, Behaviour],
                           splits: Splits) -> list[dict]:
     findings = []
     for scene in spec.scenes.values():
-        performed = repertoire(scene, training)
-        for task in splits.of(scene.id, "L0") + splits.of(scene.id, "L1") + splits.of(
-                scene.id, "L2") + splits.of(scene.id, "L3"):
-            if signature(task.behaviour, World(scene, task.layout)) not in performed:
-                findings.append({"task": task.id, "finding": "no training task performs "
-                                                             "this behaviour"})
+        performed = Repertoire(scene, training)
+        for task in splits.tasks:
+            if task.scene == scene.id:
+                missing = performed.missing(task.behaviour, World(scene, task.layout),
+                                            compose=task.level in COMPOSING_LEVELS)
+                if missing:
+                    findings.append({"task": task.id, "finding": missing})
     return findings
+
+
+def degenerate_route_findings(spec: Spec, splits: Splits) -> list[dict]:
+    return [{"task": task.id, "finding": problem} for task in splits.tasks
+            for step in task.behaviour.steps
+            for problem in degenerate_routes(step, World(spec.scenes[task.scene], task.layout))]
 
 
 def ambiguities(spec: Spec, training: dict[str, Behaviour], splits: Splits) -> list[dict]:
@@ -136,12 +150,14 @@ def audit(spec: Spec, training: dict[str, Behaviour], splits: Splits) -> dict:
         "leakage": leakage(spec, splits),
         "level_inconsistencies": level_inconsistencies(spec, splits),
         "repertoire_violations": repertoire_violations(spec, training, splits),
+        "degenerate_routes": degenerate_route_findings(spec, splits),
         "ambiguities": ambiguities(spec, training, splits),
         "rejected": len(splits.rejected),
     }
 
 
-FINDING_KEYS = ("leakage", "level_inconsistencies", "repertoire_violations", "ambiguities")
+FINDING_KEYS = ("leakage", "level_inconsistencies", "repertoire_violations", "degenerate_routes",
+                "ambiguities")
 
 
 def findings(report: dict) -> int:

@@ -9,7 +9,9 @@ no-referent   a description names nothing on the layout (with what is there)
 ambiguous     a description fits several bodies, at the nominal positions or at a jitter
               extreme (with the candidates and their distances)
 expectation   grounded on the layout, the words select another behaviour than `expect` states
-repertoire    no training task performs the behaviour (arm x action x objects x route x yaw)
+route         a body the route names is not on the way from the source to the destination
+repertoire    training does not perform the behaviour's motions (arm, action, the body's shape
+              and size, pick and put locations, route, yaw), naming the parts that are new
 leakage       as in the split audit: training pairs or forms, spec identifiers in the words
 level         the task is not what its level claims (L0 training pairs, L1 training
               instructions on new layouts, L2 training layouts, L3 new layouts)
@@ -27,17 +29,19 @@ from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import Grounder, GroundingError, Unstable, first_unstable
 from robofollow.compiler.model import Model
+from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
 from robofollow.compiler.parser import parse
+from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import LEVELS, Spec
 from robofollow.compiler.spec_loader import spec_error
-from robofollow.compiler.splits import TestTask, repertoire, signature, training_arm
+from robofollow.compiler.splits import TestTask
 from robofollow.compiler.training import describe
 from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
 from robofollow.errors import InstructionError, RoboFollowError, SpecErrors
 from robofollow.oracle.audit import TrainingFacts
 
-FINDING_KINDS = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "repertoire",
-                 "leakage", "level")
+FINDING_KINDS = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "route",
+                 "repertoire", "leakage", "level")
 STEP_FIELDS = ("action", "arm", "source", "relation", "target", "waypoints", "yaw_degrees")
 
 
@@ -62,7 +66,7 @@ class TaskAuditor:
     def __init__(self, spec: Spec, training: dict[str, Behaviour]):
         self.spec, self.training = spec, training
         self.facts = TrainingFacts(spec)
-        self.repertoires = {scene.id: repertoire(scene, training)
+        self.repertoires = {scene.id: Repertoire(scene, training)
                             for scene in spec.scenes.values()}
         self.grounders: dict[tuple[str, str], list[Grounder]] = {}
 
@@ -120,8 +124,12 @@ class TaskAuditor:
             if mismatch:
                 found.append(("expectation", mismatch))
         world = grounders[0].world
-        if signature(behaviour, world) not in self.repertoires[scene.id]:
-            found.append(("repertoire", self._outside(behaviour, scene.id, world)))
+        found += [("route", problem) for step in behaviour.steps
+                  for problem in degenerate_routes(step, world)]
+        missing = self.repertoires[scene.id].missing(behaviour, world,
+                                                     compose=task.level in COMPOSING_LEVELS)
+        if missing:
+            found.append(("repertoire", missing))
         return Examination(found, form, behaviour)
 
     def _grounders(self, scene: str, layout: str) -> list[Grounder]:
@@ -141,20 +149,9 @@ class TaskAuditor:
                 continue
             arm = wanted[index].get("arm") if index < len(wanted) else None
             if arm is None:
-                arm = training_arm(behaviour, index, world, self.repertoires[scene])
+                arm = self.repertoires[scene].arm_for(behaviour, index, world)
             steps[index] = step.model_copy(update={"arm": arm})
         return behaviour.model_copy(update={"steps": tuple(steps)})
-
-    def _outside(self, behaviour: Behaviour, scene: str, world: World) -> str:
-        """Why the behaviour is outside the repertoire, naming the nearest training use."""
-        performed = signature(behaviour, world)
-        for entry in self.repertoires[scene]:
-            if len(entry) == len(performed) and all(
-                    a[1:] == b[1:] for a, b in zip(entry, performed, strict=True)):
-                arms = ", ".join(s[0] or "?" for s in entry)
-                return (f"{describe(behaviour)}: training does this only with the "
-                        f"{arms} arm{'s' if len(entry) > 1 else ''}")
-        return f"no training task performs {describe(behaviour)}"
 
 
 def _grounding_kind(error: GroundingError) -> str:

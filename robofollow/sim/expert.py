@@ -16,6 +16,7 @@ import math
 import mujoco
 import numpy as np
 
+from robofollow.compiler import workspace
 from robofollow.compiler.plans import Plan
 from robofollow.sim import robot
 from robofollow.sim.ik import ArmIK, top_down
@@ -80,7 +81,7 @@ class Expert:
         at_home = [bool(np.allclose(command[7 * a:7 * a + 6], robot.HOME)) for a in range(2)]
         actions: list[np.ndarray] = []
         for point in plan.points:
-            arm = robot.ARMS.index(point.arm)
+            arm = workspace.ARMS.index(point.arm)
             joints = slice(7 * arm, 7 * arm + 6)
             start = command[joints].copy()
             yaw = math.radians(point.yaw_degrees)
@@ -109,7 +110,7 @@ class Expert:
 
     def reach(self, arm: int, target: np.ndarray, yaw: float) -> np.ndarray:
         """IK for a pose reached from home: seeded facing the target, wrist pointing down."""
-        base_x, base_y = robot.BASE_XY[robot.ARMS[arm]]
+        base_x, base_y = workspace.BASE_XY[workspace.ARMS[arm]]
         waist = math.atan2(-(target[0] - base_x), target[1] - base_y)  # the base faces +y
         seed = np.array([waist, *REACH_SEED])
         solutions = [self.iks[arm].solve(target, top_down(y), seed) for y in (yaw, yaw + math.pi)]

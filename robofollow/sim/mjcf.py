@@ -14,6 +14,7 @@ from functools import lru_cache
 import jinja2
 import numpy as np
 
+from robofollow.compiler import workspace
 from robofollow.compiler.spec import Body, Scene
 from robofollow.compiler.spec_loader import BOWL_FLOOR
 from robofollow.sim import robot
@@ -23,8 +24,6 @@ TIMESTEP = 0.002  # s: physics step
 BOWL_WALL = 0.004  # m: bowl wall thickness
 BOWL_SEGMENTS = 16  # wall boxes around a bowl
 SPAWN_LIFT = 0.001  # m: movable objects start this far above their resting height
-TABLE_SIZE = (1.2, 0.7, 0.04)  # m
-TABLE_CENTRE_Y = -0.05  # m
 
 
 @dataclass(frozen=True)
@@ -116,12 +115,12 @@ def scene_xml(scene: Scene, layout: str, width: int = 320, height: int = 240) ->
             fixtures.append(_fixture(body, (where.x, where.y, where.z)))
         else:
             objects.append(_object(body, (where.x, where.y, where.z + SPAWN_LIFT)))
-    half = np.multiply(TABLE_SIZE, 0.5)
-    table = {"x": 0.0, "y": TABLE_CENTRE_Y, "z": scene.table_height - half[2],
+    half = np.multiply(workspace.TABLE_SIZE, 0.5)
+    table = {"x": 0.0, "y": workspace.TABLE_CENTRE_Y, "z": scene.table_height - half[2],
              "hx": half[0], "hy": half[1], "hz": half[2]}
     base_quat = _fmt((math.cos(robot.BASE_YAW / 2), 0, 0, math.sin(robot.BASE_YAW / 2)))
     arms = [{"side": side, "quat": base_quat,
-             "pos": _fmt((*robot.BASE_XY[side], scene.table_height))} for side in robot.ARMS]
+             "pos": _fmt((*workspace.BASE_XY[side], scene.table_height))} for side in workspace.ARMS]
     cameras = [{"name": c.name, "pos": _fmt(c.position), "xyaxes": _xyaxes(c), "fovy": c.fovy,
                 "orthographic": c.orthographic} for c in CAMERAS]
     return _template().render(

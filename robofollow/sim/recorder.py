@@ -5,7 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from robofollow.sim import robot
+from robofollow.compiler import workspace
 from robofollow.sim.simulation import CONTROL_HZ, Simulation
 from robofollow.trajectory import CONTACT_EXTRAS, Trajectory
 
@@ -18,7 +18,7 @@ class Recorder:
         model = sim.model
         names = list(sim.bodies) + list(CONTACT_EXTRAS)
         group = {model.body(b).id: names.index(b) for b in sim.bodies}
-        for arm in robot.ARMS:
+        for arm in workspace.ARMS:
             gripper = names.index(f"{arm}_gripper")
             for part in ("gripper_link", "finger_a", "finger_b"):
                 group[model.body(f"{arm}/{part}").id] = gripper
@@ -26,7 +26,7 @@ class Recorder:
                                     for g in range(model.ngeom)])
         self.geom_group[model.geom("table").id] = names.index("table")
         self.fingers = [(model.geom(f"{arm}/finger_a").id, model.geom(f"{arm}/finger_b").id)
-                        for arm in robot.ARMS]
+                        for arm in workspace.ARMS]
         self.size = len(names)
         self.frames: dict[str, list] = {k: [] for k in (
             "time", "state", "action", "positions", "quaternions", "ee_positions",

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 import numpy as np
 
-ARMS = ("left", "right")
+from robofollow.compiler.workspace import ARMS, GRIPPER_OPENING
+
 ARM_JOINTS = ("waist", "shoulder", "elbow", "forearm_roll", "wrist_angle", "wrist_rotate")
 
-BASE_XY = {"left": (-0.24, -0.38), "right": (0.24, -0.38)}  # m: arm bases, on the table top
 BASE_YAW = np.pi / 2  # rad: both arms face +y, away from the robot side of the table
 
 # rad: the rest pose both arms start from and return to (gripper high, outside the work area)
@@ -21,7 +21,7 @@ HOME = np.array([0.0, -0.96, 1.16, 0.0, -0.3, 0.0])
 JOINT_LOW = np.array([-3.14158, -1.85005, -1.76278, -3.14158, -1.8675, -3.14158])
 JOINT_HIGH = np.array([3.14158, 1.25664, 1.6057, 3.14158, 2.23402, 3.14158])
 
-FINGER_TRAVEL = 0.0375  # m: each finger's stroke; an open gripper is 7.5 cm wide inside
+FINGER_TRAVEL = GRIPPER_OPENING / 2  # m: each finger's stroke
 TCP_OFFSET = 0.13  # m: grasp centre (between the finger pads) along the gripper axis
 FINGER = {"x": 0.112, "hx": 0.03, "hy": 0.003, "hz": 0.012}  # m: finger box, gripper frame
 

@@ -13,6 +13,7 @@ from functools import lru_cache
 import mujoco
 import numpy as np
 
+from robofollow.compiler import workspace
 from robofollow.compiler.spec import Scene
 from robofollow.compiler.world import World, sample_offsets
 from robofollow.errors import RoboFollowError
@@ -49,16 +50,16 @@ class Simulation:
         self.body_ids = np.array([model.body(b).id for b in self.bodies])
         self.free_qpos = {b: model.jnt_qposadr[model.joint(b).id] for b in self.movable}
         self.arm_qpos = np.array([[model.jnt_qposadr[model.joint(f"{arm}/{j}").id]
-                                   for j in robot.ARM_JOINTS] for arm in robot.ARMS])
+                                   for j in robot.ARM_JOINTS] for arm in workspace.ARMS])
         self.arm_dof = np.array([[model.jnt_dofadr[model.joint(f"{arm}/{j}").id]
-                                  for j in robot.ARM_JOINTS] for arm in robot.ARMS])
+                                  for j in robot.ARM_JOINTS] for arm in workspace.ARMS])
         self.finger_qpos = np.array([[model.jnt_qposadr[model.joint(f"{arm}/finger_{s}").id]
-                                      for s in "ab"] for arm in robot.ARMS])
+                                      for s in "ab"] for arm in workspace.ARMS])
         self.arm_ctrl = np.array([[model.actuator(f"{arm}/{j}").id for j in robot.ARM_JOINTS]
-                                  for arm in robot.ARMS])
+                                  for arm in workspace.ARMS])
         self.finger_ctrl = np.array([[model.actuator(f"{arm}/finger_{s}").id for s in "ab"]
-                                     for arm in robot.ARMS])
-        self.tcp_sites = np.array([model.site(f"{arm}/tcp").id for arm in robot.ARMS])
+                                     for arm in workspace.ARMS])
+        self.tcp_sites = np.array([model.site(f"{arm}/tcp").id for arm in workspace.ARMS])
         self.start_world: World | None = None
 
     # -- episode start ---------------------------------------------------------------------
