@@ -28,3 +28,24 @@ class Behaviour(Model):
     condition: bool | None = None  # a conditional's condition, evaluated in the layout
     branch: Literal["then", "otherwise"] | None = None
     other: tuple[Step, ...] | None = None  # the branch not taken, when it grounds
+
+
+def describe_steps(steps: tuple[Step, ...]) -> str:
+    """Steps in the spec's `expect` syntax."""
+    parts = []
+    for step in steps:
+        words = [step.action, step.arm or "?", step.source]
+        if step.action == "place":
+            words += [step.relation, step.target]
+            words += [f"{mode} {body}" for mode, body in step.waypoints]
+            if step.yaw_degrees is not None:
+                words.append(f"yaw {step.yaw_degrees:g}")
+        elif step.action == "push":
+            words += ["towards", step.target]
+        parts.append(" ".join(words))
+    return ", ".join(parts) or "nothing"
+
+
+def describe(behaviour: Behaviour) -> str:
+    prefix = f"{behaviour.branch}: " if behaviour.branch else ""
+    return prefix + describe_steps(behaviour.steps)

@@ -17,10 +17,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from robofollow.compiler.behaviour import Behaviour, Step
+from robofollow.compiler.behaviour import Behaviour, Step, describe_steps
 from robofollow.compiler.plans import plan
 from robofollow.compiler.spec import Scene
-from robofollow.compiler.training import describe_steps
 from robofollow.compiler.world import World
 
 MOTION_XY_TOLERANCE = 0.03  # m: pick, put and route points this close in the plane agree

@@ -84,36 +84,6 @@ class _Planner:
         self.add("lift", step.arm, lifted, CLOSED)
         return lifted
 
-    def place_point(self, step: Step) -> tuple[float, float, float]:
-        world, half = self.world, self.world.bodies[step.source].half_extents
-        target = world.poses[step.target]
-        if step.relation == "on":
-            return (target.x, target.y, world.top(step.target) + half[2] + STACK_CLEARANCE)
-        if step.relation == "in":
-            return (target.x, target.y, world.bottom(step.target) + 0.005 + half[2] + 0.01)
-        direction = DIRECTIONS.get(step.relation, (1.0, 0.0))  # next_to: to the right
-        landmark = world.bodies[step.target].half_extents
-        reach = (abs(direction[0]) * (landmark[0] + half[0]) +
-                 abs(direction[1]) * (landmark[1] + half[1]) + PLACE_GAP)
-        spots = [(target.x + direction[0] * (reach + out) - direction[1] * side,
-                  target.y + direction[1] * (reach + out) + direction[0] * side)
-                 for out, side in PLACE_SHIFTS]
-        free = [spot for spot in spots if self.free(spot, step.source)
-                and in_cone(spot[0] - target.x, spot[1] - target.y, direction)
-                and math.dist(spot, (target.x, target.y)) <= RELATION_RANGE]
-        x, y = (free or spots)[0]
-        return (x, y, world.table + half[2] + TABLE_CLEARANCE)
-
-    def free(self, spot: tuple[float, float], source: str) -> bool:
-        """Whether `source` set down at `spot` keeps PLACE_CLEARANCE from every other body."""
-        half = self.world.bodies[source].half_extents
-        for body, pose in self.world.poses.items():
-            other = self.world.bodies[body].half_extents
-            if body != source and (abs(spot[0] - pose.x) < half[0] + other[0] + PLACE_CLEARANCE
-                                   and abs(spot[1] - pose.y) < half[1] + other[1] + PLACE_CLEARANCE):
-                return False
-        return True
-
     def route(self, step: Step, start: tuple[float, float, float]) -> None:
         over = passes_over(step, self.world)
         if not over:
@@ -128,7 +98,7 @@ class _Planner:
     def place(self, step: Step) -> None:
         lifted = self.pick(step)
         self.route(step, lifted)
-        point = self.place_point(step)
+        point = place_spot(self.world, step)[0]
         yaw = step.yaw_degrees or 0.0
         self.add("pre_place", step.arm, _up(point, PRE_PLACE), CLOSED, yaw)
         self.add("place", step.arm, point, CLOSED, yaw)
@@ -140,6 +110,42 @@ class _Planner:
         source, target = self.world.poses[step.source], self.world.poses[step.target]
         self.points += push_points(self.world, step.arm, step.source,
                                    (target.x - source.x, target.y - source.y))
+
+
+def place_spot(world: World, step: Step) -> tuple[tuple[float, float, float], bool]:
+    """Where a place step releases its object, and whether that spot is free: on or in the
+    target, or beside it in the relation's direction, at the first of PLACE_SHIFTS that keeps
+    PLACE_CLEARANCE from every other body and still stands in the relation (else the nominal
+    spot, not free)."""
+    half = world.bodies[step.source].half_extents
+    target = world.poses[step.target]
+    if step.relation == "on":
+        return (target.x, target.y, world.top(step.target) + half[2] + STACK_CLEARANCE), True
+    if step.relation == "in":
+        return (target.x, target.y, world.bottom(step.target) + 0.005 + half[2] + 0.01), True
+    direction = DIRECTIONS.get(step.relation, (1.0, 0.0))  # next_to: to the right
+    landmark = world.bodies[step.target].half_extents
+    reach = (abs(direction[0]) * (landmark[0] + half[0]) +
+             abs(direction[1]) * (landmark[1] + half[1]) + PLACE_GAP)
+    spots = [(target.x + direction[0] * (reach + out) - direction[1] * side,
+              target.y + direction[1] * (reach + out) + direction[0] * side)
+             for out, side in PLACE_SHIFTS]
+    free = [spot for spot in spots if _free(world, spot, step.source)
+            and in_cone(spot[0] - target.x, spot[1] - target.y, direction)
+            and math.dist(spot, (target.x, target.y)) <= RELATION_RANGE]
+    x, y = (free or spots)[0]
+    return (x, y, world.table + half[2] + TABLE_CLEARANCE), bool(free)
+
+
+def _free(world: World, spot: tuple[float, float], source: str) -> bool:
+    """Whether `source` set down at `spot` keeps PLACE_CLEARANCE from every other body."""
+    half = world.bodies[source].half_extents
+    for body, pose in world.poses.items():
+        other = world.bodies[body].half_extents
+        if body != source and (abs(spot[0] - pose.x) < half[0] + other[0] + PLACE_CLEARANCE
+                               and abs(spot[1] - pose.y) < half[1] + other[1] + PLACE_CLEARANCE):
+            return False
+    return True
 
 
 def push_points(world: World, arm: str, body: str,

@@ -29,6 +29,7 @@ from robofollow.compiler.spec import (
     SplitRule,
     Task,
 )
+from robofollow.compiler.workspace import table_bounds
 from robofollow.errors import InstructionError, SpecError, SpecErrors
 from robofollow.resources import grammar_text
 
@@ -184,7 +185,7 @@ class _Loader:
                 self.error("unknown-object", f"no object named {target!s}", target)
             jitter[str(target)] = self.jitter(attributes)
         table = settings["table_height"]
-        resolver = _LayoutResolver(self, bodies, points, table)
+        resolver = _LayoutResolver(self, bodies, points, table, jitter)
         layouts = resolver.resolve(by_kind.get("layout", []))
         defined = set(resolver.raw)  # a layout that failed to resolve is reported once, there
         tasks = tuple(t for t in (self.task(item, str(name), bodies, defined)
@@ -427,8 +428,10 @@ class _LayoutResolver:
     """Layouts written as placements or as operations on another layout -> absolute poses."""
 
     def __init__(self, loader: _Loader, bodies: dict[str, Body],
-                 points: dict[str, tuple[float, float]], table: float):
+                 points: dict[str, tuple[float, float]], table: float,
+                 jitter: dict[str, Jitter]):
         self.loader = loader
+        self.jitter = jitter
         self.bodies = bodies
         self.points = points
         self.table = table
@@ -573,17 +576,43 @@ class _LayoutResolver:
         return placed
 
     def check_overlaps(self, placed: dict[str, Placed], where: Token) -> None:
-        on_table = sorted(b for b, p in placed.items()
-                          if p.relation == "table" and self.bodies[b].kind != "label")
-        for i, a in enumerate(on_table):
-            for b in on_table[i + 1:]:
-                if _footprints_overlap(self.bodies[a], placed[a], self.bodies[b], placed[b]):
+        """Bodies on the table stay on it and clear of each other with the jitter at its
+        extremes; nothing is stacked on a body that rolls."""
+        on_table = sorted(b for b, p in placed.items() if p.relation == "table")
+        ranges = {b: self.jitter.get(b) or self.jitter.get("*") or Jitter() for b in on_table}
+        low_x, high_x, low_y, high_y = table_bounds()
+        for body in on_table:
+            half, at, jitter = self.bodies[body].half_extents, placed[body], ranges[body]
+            if (at.x + jitter.x[0] - half[0] < low_x or at.x + jitter.x[1] + half[0] > high_x
+                    or at.y + jitter.y[0] - half[1] < low_y
+                    or at.y + jitter.y[1] + half[1] > high_y):
+                self.loader.error("off-table", f"{body} at ({at.x:g}, {at.y:g}) can leave the "
+                                  f"table (x in [{low_x:g}, {high_x:g}], y in [{low_y:g}, "
+                                  f"{high_y:g}]) in layout {where!s}", where)
+        solid = [b for b in on_table if self.bodies[b].kind != "label"]
+        for i, a in enumerate(solid):
+            for b in solid[i + 1:]:
+                pair = self.bodies[a], placed[a], self.bodies[b], placed[b]
+                if _footprints_overlap(*pair, Jitter(), Jitter()):
                     self.loader.error("overlap", f"{a} and {b} overlap in layout {where!s}", where)
+                elif _footprints_overlap(*pair, ranges[a], ranges[b]):
+                    self.loader.error("overlap", f"{a} and {b} can overlap in layout {where!s} "
+                                      "with the jitter at its extremes", where)
+        for body, at in placed.items():
+            if at.relation == "on" and self.bodies[at.support].kind == "sphere":
+                self.loader.error("unstable-stack", f"{body} cannot rest on {at.support}, a "
+                                  f"sphere, in layout {where!s}", where)
 
 
-def _footprints_overlap(a: Body, pa: Placed, b: Body, pb: Placed) -> bool:
+def _footprints_overlap(a: Body, pa: Placed, b: Body, pb: Placed, ja: Jitter,
+                        jb: Jitter) -> bool:
+    """Whether two footprints can overlap for some offsets within their jitter ranges."""
+    dx = (pa.x - pb.x + ja.x[0] - jb.x[1], pa.x - pb.x + ja.x[1] - jb.x[0])
+    dy = (pa.y - pb.y + ja.y[0] - jb.y[1], pa.y - pb.y + ja.y[1] - jb.y[0])
+    gap_x = 0.0 if dx[0] <= 0 <= dx[1] else min(abs(dx[0]), abs(dx[1]))
+    gap_y = 0.0 if dy[0] <= 0 <= dy[1] else min(abs(dy[0]), abs(dy[1]))
     round_kinds = ("sphere", "cylinder", "bowl")
     if a.kind in round_kinds and b.kind in round_kinds:
-        return math.hypot(pa.x - pb.x, pa.y - pb.y) < a.half_extents[0] + b.half_extents[0]
-    return (abs(pa.x - pb.x) < a.half_extents[0] + b.half_extents[0]
-            and abs(pa.y - pb.y) < a.half_extents[1] + b.half_extents[1])
+        return math.hypot(gap_x, gap_y) < a.half_extents[0] + b.half_extents[0]
+    return (gap_x < a.half_extents[0] + b.half_extents[0]
+            and gap_y < a.half_extents[1] + b.half_extents[1])

@@ -7,8 +7,9 @@
   logical form no training instruction has, said in words training instructions use.
 - L3: the kept L1 tasks reworded the same way on their changed layouts.
 
-A behaviour is inside the repertoire when training performs its motions (motions.py), and its
-route, if any, is on the way (routes.py). L1 and L3 layouts must look different from every
+A candidate is kept when it grounds to one behaviour (also with the jitter at its extremes),
+its route, if any, is on the way (routes.py), training performs its motions (motions.py), and
+the expert can perform it (feasibility.py). L1 and L3 layouts must look different from every
 training layout (observation.py).
 """
 
@@ -19,6 +20,7 @@ import hashlib
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import Grounder, GroundingError, instability
+from robofollow.compiler.feasibility import infeasible
 from robofollow.compiler.model import Model
 from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
 from robofollow.compiler.observation import look_alike
@@ -26,7 +28,7 @@ from robofollow.compiler.realize import STYLES, realize
 from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import Level, Scene, Spec
 from robofollow.compiler.wordings import GENERATORS, Describer, concepts
-from robofollow.compiler.world import jitter_worlds
+from robofollow.compiler.world import CORNERS, jitter_worlds
 
 
 class TestTask(Model):
@@ -130,11 +132,9 @@ class _Generator:
             self.reject(level, layout, instruction, origin,
                         f"outside the training repertoire: {missing}")
             return
-        covered = [f"{b} rests on {s.source}" for s in behaviour.steps
-                   for b in world.carried_by(s.source)]
-        if covered:
-            self.reject(level, layout, instruction, origin, f"the object to move is covered "
-                        f"({', '.join(covered)}); no training task moves a stack")
+        problems = infeasible(behaviour, [g.world for g in self.grounders_of(layout)[:1 + len(CORNERS)]])
+        if problems:
+            self.reject(level, layout, instruction, origin, f"infeasible: {'; '.join(problems)}")
             return
         unstable = instability(form, self.grounders_of(layout)[1:], behaviour, first_case=1)
         if unstable:
@@ -149,7 +149,7 @@ class _Generator:
                                    origin=origin, wording=wording))
 
     def grounders_of(self, layout: str) -> list[Grounder]:
-        if layout not in self.grounders:
+        if layout not in self.grounders:  # the corner worlds come first
             self.grounders[layout] = [Grounder(w) for w in jitter_worlds(self.scene, layout)]
         return self.grounders[layout]
 

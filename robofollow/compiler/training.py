@@ -1,4 +1,5 @@
-"""Check training tasks against their layouts: one behaviour per task, as `expect` says.
+"""Check training tasks against their layouts: one behaviour per task, as `expect` says,
+that the expert can perform (feasibility.py).
 
 Every paraphrase of a task must ground to the same behaviour. Paraphrases may leave the arm
 unnamed ("Move the blue slab ..."); the task's arm is the one the others name, and naming two
@@ -7,11 +8,12 @@ arms is a disagreement.
 
 from __future__ import annotations
 
-from robofollow.compiler.behaviour import Behaviour, Step
+from robofollow.compiler.behaviour import Behaviour, describe
+from robofollow.compiler.feasibility import infeasible
 from robofollow.compiler.grounding import GroundingError, ground
 from robofollow.compiler.spec import Expected, Scene, Spec, Task
 from robofollow.compiler.spec_loader import spec_error
-from robofollow.compiler.world import World
+from robofollow.compiler.world import World, corner_worlds
 from robofollow.errors import SpecError, SpecErrors
 
 
@@ -23,27 +25,6 @@ class TaskProblem(Exception):
         self.code = code
         self.message = message
         self.index = index
-
-
-def describe_steps(steps: tuple[Step, ...]) -> str:
-    """Steps in the spec's `expect` syntax."""
-    parts = []
-    for step in steps:
-        words = [step.action, step.arm or "?", step.source]
-        if step.action == "place":
-            words += [step.relation, step.target]
-            words += [f"{mode} {body}" for mode, body in step.waypoints]
-            if step.yaw_degrees is not None:
-                words.append(f"yaw {step.yaw_degrees:g}")
-        elif step.action == "push":
-            words += ["towards", step.target]
-        parts.append(" ".join(words))
-    return ", ".join(parts) or "nothing"
-
-
-def describe(behaviour: Behaviour) -> str:
-    prefix = f"{behaviour.branch}: " if behaviour.branch else ""
-    return prefix + describe_steps(behaviour.steps)
 
 
 def expected_behaviour(expected: Expected) -> Behaviour:
@@ -103,6 +84,11 @@ def check_training(spec: Spec) -> dict[str, Behaviour]:
                         "expect-mismatch", f"the instructions mean {describe(behaviour)}, but "
                         f"expect says {describe(expected)}", task.source, len(task.label)))
                     continue
+            problems = infeasible(behaviour, corner_worlds(scene, task.layout))
+            if problems:
+                errors.append(spec_error("infeasible", "the expert cannot do this: "
+                                         + "; ".join(problems), task.source, len(task.label)))
+                continue
             behaviours[task.label] = behaviour
     if errors:
         raise SpecErrors(errors)

@@ -132,18 +132,25 @@ def sample_offsets(scene: Scene, layout: str, rng) -> dict[str, tuple[float, flo
     return offsets
 
 
-def jitter_worlds(scene: Scene, layout: str) -> list[World]:
-    """The layout at nominal positions, with every body at the same corner of its jitter
-    range (four cases), and with each body alone at each corner."""
+def _corner(scene: Scene, body: str, index: tuple[int, int]) -> tuple[float, float]:
+    jitter = scene.jitter_of(body)
+    return jitter.x[index[0]], jitter.y[index[1]]
+
+
+CORNERS = tuple(itertools.product((0, 1), (0, 1)))
+
+
+def corner_worlds(scene: Scene, layout: str) -> list[World]:
+    """The layout at nominal positions, then with every body at the same corner of its jitter
+    range (four cases)."""
     bodies = [b for b, p in scene.layouts[layout].placed.items() if p.support is None]
-    corners = list(itertools.product((0, 1), (0, 1)))
+    return [World(scene, layout)] + [
+        World(scene, layout, {b: _corner(scene, b, c) for b in bodies}) for c in CORNERS]
 
-    def corner(body: str, index: tuple[int, int]) -> tuple[float, float]:
-        jitter = scene.jitter_of(body)
-        return jitter.x[index[0]], jitter.y[index[1]]
 
-    worlds = [World(scene, layout)]
-    worlds += [World(scene, layout, {b: corner(b, c) for b in bodies}) for c in corners]
-    worlds += [World(scene, layout, {b: corner(b, c)}) for b in bodies for c in corners
-               if corner(b, c) != (0.0, 0.0)]
-    return worlds
+def jitter_worlds(scene: Scene, layout: str) -> list[World]:
+    """The corner worlds, then each body alone at each corner of its jitter range."""
+    bodies = [b for b, p in scene.layouts[layout].placed.items() if p.support is None]
+    return corner_worlds(scene, layout) + [
+        World(scene, layout, {b: _corner(scene, b, c)}) for b in bodies for c in CORNERS
+        if _corner(scene, b, c) != (0.0, 0.0)]

@@ -10,6 +10,7 @@
   step by step for L2 and L3 (motions.py; recomputed here, independently of generation);
 - routes: every body a route names is on the way from the source to the destination
   (routes.py);
+- feasibility: the expert can perform every test behaviour (feasibility.py);
 - ambiguity: every instruction grounds to one and the same behaviour on its layout at the
   nominal positions and with the jitter at its extremes.
 """
@@ -20,6 +21,7 @@ import re
 
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.feasibility import infeasible
 from robofollow.compiler.grounding import Grounder, instability
 from robofollow.compiler.lexicon import VOCABULARY
 from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
@@ -27,7 +29,7 @@ from robofollow.compiler.observation import look_alike
 from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import Spec
 from robofollow.compiler.splits import Splits
-from robofollow.compiler.world import World, jitter_worlds
+from robofollow.compiler.world import World, corner_worlds, jitter_worlds
 from robofollow.oracle.entropy import entropy_bits, scene_groups
 
 
@@ -114,6 +116,12 @@ def repertoire_violations(spec: Spec, training: dict[str, Behaviour],
     return findings
 
 
+def infeasible_tasks(spec: Spec, splits: Splits) -> list[dict]:
+    return [{"task": task.id, "finding": problem} for task in splits.tasks
+            for problem in infeasible(task.behaviour,
+                                      corner_worlds(spec.scenes[task.scene], task.layout))]
+
+
 def degenerate_route_findings(spec: Spec, splits: Splits) -> list[dict]:
     return [{"task": task.id, "finding": problem} for task in splits.tasks
             for step in task.behaviour.steps
@@ -151,13 +159,14 @@ def audit(spec: Spec, training: dict[str, Behaviour], splits: Splits) -> dict:
         "level_inconsistencies": level_inconsistencies(spec, splits),
         "repertoire_violations": repertoire_violations(spec, training, splits),
         "degenerate_routes": degenerate_route_findings(spec, splits),
+        "infeasible": infeasible_tasks(spec, splits),
         "ambiguities": ambiguities(spec, training, splits),
         "rejected": len(splits.rejected),
     }
 
 
 FINDING_KEYS = ("leakage", "level_inconsistencies", "repertoire_violations", "degenerate_routes",
-                "ambiguities")
+                "infeasible", "ambiguities")
 
 
 def findings(report: dict) -> int:

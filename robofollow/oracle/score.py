@@ -12,11 +12,10 @@ from __future__ import annotations
 
 import itertools
 
-from robofollow.compiler.behaviour import Behaviour, Step
+from robofollow.compiler.behaviour import Behaviour, Step, describe
 from robofollow.compiler.goals import scoring_nodes
 from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
 from robofollow.compiler.spec import Scene
-from robofollow.compiler.training import describe
 from robofollow.oracle.chance import passes_work
 from robofollow.oracle.instead import describe_actions
 from robofollow.oracle.recording import Attempt, Recording, arm_index

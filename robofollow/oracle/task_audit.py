@@ -10,6 +10,7 @@ ambiguous     a description fits several bodies, at the nominal positions or at 
               extreme (with the candidates and their distances)
 expectation   grounded on the layout, the words select another behaviour than `expect` states
 route         a body the route names is not on the way from the source to the destination
+infeasible    the expert cannot perform the behaviour (reach, grip, a busy arm, no free spot)
 repertoire    training does not perform the behaviour's motions (arm, action, the body's shape
               and size, pick and put locations, route, yaw), naming the parts that are new
 leakage       as in the split audit: training pairs or forms, spec identifiers in the words
@@ -26,8 +27,9 @@ from dataclasses import dataclass
 from pydantic import ValidationError
 
 from robofollow.compiler import lf
-from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.behaviour import Behaviour, describe
 from robofollow.compiler.grounding import Grounder, GroundingError, Unstable, first_unstable
+from robofollow.compiler.feasibility import infeasible
 from robofollow.compiler.model import Model
 from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
 from robofollow.compiler.parser import parse
@@ -35,13 +37,12 @@ from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import LEVELS, Spec
 from robofollow.compiler.spec_loader import spec_error
 from robofollow.compiler.splits import TestTask
-from robofollow.compiler.training import describe
-from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
+from robofollow.compiler.world import CORNERS, EXTREME_AXES, World, jitter_worlds
 from robofollow.errors import InstructionError, RoboFollowError, SpecErrors
 from robofollow.oracle.audit import TrainingFacts
 
 FINDING_KINDS = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "route",
-                 "repertoire", "leakage", "level")
+                 "infeasible", "repertoire", "leakage", "level")
 STEP_FIELDS = ("action", "arm", "source", "relation", "target", "waypoints", "yaw_degrees")
 
 
@@ -126,6 +127,8 @@ class TaskAuditor:
         world = grounders[0].world
         found += [("route", problem) for step in behaviour.steps
                   for problem in degenerate_routes(step, world)]
+        found += [("infeasible", problem) for problem in
+                  infeasible(behaviour, [g.world for g in grounders[:1 + len(CORNERS)]])]
         missing = self.repertoires[scene.id].missing(behaviour, world,
                                                      compose=task.level in COMPOSING_LEVELS)
         if missing:
@@ -306,7 +309,7 @@ def task_list(splits) -> list[dict]:
             for t in splits.tasks]
 
 
-FATAL = ("invalid", "parse", "no-referent", "ambiguous", "expectation")  # for a listed test
+FATAL = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "infeasible")  # for a listed test
 
 
 def listed_tests(spec: Spec, training: dict[str, Behaviour]) -> tuple[TestTask, ...]:

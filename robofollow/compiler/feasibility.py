@@ -1,0 +1,80 @@
+"""Whether the expert can perform a behaviour on a layout, decided from geometry alone (no
+physics), before anything is simulated:
+
+- every point of the expert's plan lies within its arm's reach (workspace.py), at the
+  nominal positions and with the jitter at its extremes;
+- every body to grip fits the open gripper;
+- no arm is asked to act while it still holds what an earlier step picked up;
+- nothing rests on a body to move;
+- a stack goes onto a free, flat top; a relative placement finds a free spot beside its
+  landmark.
+"""
+
+from __future__ import annotations
+
+from robofollow.compiler import workspace
+from robofollow.compiler.behaviour import Behaviour, describe_steps
+from robofollow.compiler.plans import place_spot, plan
+from robofollow.compiler.world import World
+
+ROLLING = ("sphere",)  # kinds nothing can be stacked on
+
+
+def infeasible(behaviour: Behaviour, worlds: list[World]) -> list[str]:
+    """Why the expert cannot perform `behaviour` (empty: it can). `worlds` are one layout at
+    its nominal positions first, then at jitter extremes."""
+    nominal = worlds[0]
+    problems = _holding(behaviour) + _handling(behaviour, nominal)
+    for world in worlds:
+        problems += [p for p in _reach(behaviour, world) if p not in problems]
+    return problems
+
+
+def _holding(behaviour: Behaviour) -> list[str]:
+    held: dict[str, str] = {}
+    problems = []
+    for index, step in enumerate(behaviour.steps, start=1):
+        if step.arm in held:
+            problems.append(f"step {index} ({describe_steps((step,))}) needs the {step.arm} "
+                            f"arm, which still holds {held[step.arm]}")
+        if step.action == "pick" and step.arm is not None:
+            held[step.arm] = step.source
+    return problems
+
+
+def _handling(behaviour: Behaviour, world: World) -> list[str]:
+    problems = []
+    widest = workspace.GRIPPER_OPENING - workspace.GRIP_CLEARANCE
+    for step in behaviour.steps:
+        body = world.bodies[step.source]
+        covered = world.carried_by(step.source)
+        if covered:
+            problems.append(f"{', '.join(covered)} rests on {step.source}, the object to move")
+        if step.action != "push" and 2 * body.half_extents[0] > widest:
+            problems.append(f"{step.source} is {200 * body.half_extents[0]:.1f} cm wide; the "
+                            f"open gripper takes at most {100 * widest:.1f} cm")
+        if step.action != "place":
+            continue
+        if step.relation == "on":
+            if world.bodies[step.target].kind in ROLLING:
+                problems.append(f"nothing stays on {step.target}, a "
+                                f"{world.bodies[step.target].kind}")
+            others = [b for b in world.carried_by(step.target) if b != step.source]
+            if others:
+                problems.append(f"{step.target} already carries {', '.join(others)}")
+        elif step.relation != "in" and not place_spot(world, step)[1]:
+            problems.append(f"no free spot {step.relation.replace('_', ' ')} {step.target} for "
+                            f"{step.source}")
+    return problems
+
+
+def _reach(behaviour: Behaviour, world: World) -> list[str]:
+    if any(step.arm is None for step in behaviour.steps):
+        return []
+    problems = []
+    for point in plan(behaviour, world).points:
+        if point.position is not None:
+            problem = workspace.reach_problem(point.arm, point.position, world.table)
+            if problem:
+                problems.append(f"{point.name}: {problem}")
+    return problems
