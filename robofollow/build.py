@@ -118,11 +118,15 @@ def summary(compiled: Compiled) -> str:
     lines = [f"RoboFollow: {len(spec.scenes)} scenes, {len(spec.tasks)} training tasks, "
              f"spec digest {spec.digest[:12]}",
              f"scene entropy H(T|S) = {report['scene_entropy_bits']:.3f} bits over "
-             f"{len(report['groups'])} training scene groups",
+             f"{len(report['groups'])} training scene groups (task labels, as the paper counts); "
+             f"over distinct behaviours H(B|S) = {report['behaviour_entropy_bits']:.3f} bits",
              "", "test tasks per scene and level (each run for the split's rounds):",
              "          " + "".join(f"{level:>6}" for level in LEVELS)]
     for scene, counts in report["counts"].items():
         lines.append(f"{scene:<10}" + "".join(f"{counts[level]:>6}" for level in LEVELS))
+    same = report["same_behaviour"]
+    lines += ["", f"training tasks with the same behaviour on one layout: {len(same) or 'none'}"]
+    lines += [f"  {item['layout']}: {', '.join(item['tasks'])}" for item in same]
     lines += ["", f"rejected candidates: {report['rejected']} (rejected.jsonl says why)"]
     for key in FINDING_KEYS:
         title = key.replace("_", " ")

@@ -4,9 +4,11 @@ own tasks audited back with no finding, and the `robofollow audit --tasks` outpu
 from __future__ import annotations
 
 import json
+from pathlib import Path
 
 import pytest
 
+from robofollow.build import compile_specs
 from robofollow.cli import main
 from robofollow.oracle.task_audit import (
     FINDING_KINDS,
@@ -47,12 +49,50 @@ TASKS = [
     _task("fine", "scene2", "L2", "default", LEFT_BOWL, {"steps": [
         {"action": "place", "arm": "right", "source": "small_blue_cylinder", "target":
          "green_bowl"}]}),
+    _task("twice", "scene2", "L2", "default", LEFT_BOWL),
+    # the added layout same_look swaps two identical yellow blocks: nothing visible changes
+    _task("look-alike", "scene1", "L1", "same_look",
+          "Use your left arm to pick up the block to the left of the green ball."),
+    # scene3_3 puts the blue slab in the red slab's own column: passing over it turns back
+    _task("backwards", "scene3", "L1", "scene3_3",
+          "Use your right arm to pick up the red slab, pass over the blue slab, and place it on "
+          "the blue square label with the short side facing front."),
+    # the added layout far puts the red cube beyond either arm's reach
+    _task("far", "scene2", "L1", "far", "Use your left arm to pick up the rightmost cube."),
+    _task("new-pick", "scene1", "L1", "scene1_1",
+          "Use your right arm to pick up the block in front of the red cylinder and place it "
+          "behind the green ball."),
+    _task("new-put", "scene1", "L1", "scene1_1",
+          "Use your right arm to pick up the block to the right of the red ball and place it "
+          "behind the red cylinder."),
+    _task("new-object", "scene2", "L1", "scene2_2",
+          "Pick up the smaller blue object using your left arm."),
+    _task("new-pair", "scene4", "L1", "scene4_4",
+          "First use your left arm to pick up the red sphere, then use your right arm to pick up "
+          "the green cylinder."),
 ]
+EXTRA_LAYOUTS = {
+    "scene1": "layout same_look from default { swap yellow_block_1 yellow_block_3 }",
+    "scene2": "layout far from default { move small_red_cube to (0.45, 0.2) }",
+}
+
+
+def extended_specs(folder: Path) -> Path:
+    """The built-in specs with EXTRA_LAYOUTS added to their scenes."""
+    folder.mkdir()
+    for source in sorted(builtin_specs().glob("*.rf")):
+        text = source.read_text()
+        extra = EXTRA_LAYOUTS.get(source.stem)
+        if extra:
+            at = text.index("    split L0")
+            text = text[:at] + f"    {extra}\n" + text[at:]
+        (folder / source.name).write_text(text)
+    return folder
 
 
 @pytest.fixture(scope="module")
-def findings() -> dict[str, list[tuple[str, str]]]:
-    compiled = benchmark()
+def findings(tmp_path_factory) -> dict[str, list[tuple[str, str]]]:
+    compiled = compile_specs(extended_specs(tmp_path_factory.mktemp("audit") / "specs"))
     listed = [ListedTask(**task) for task in TASKS]
     result = audit_task_list(compiled.spec, compiled.training, listed)
     assert result["checked"] == len(TASKS)
@@ -83,6 +123,20 @@ def test_every_kind_of_finding_is_reported(findings):
     ("new-layout-l2", "level", "an L2 task is on a training layout"),
     ("rephrased-l1", "level", "an L1 task's instruction is a training instruction"),
     ("where", "invalid", "scene2 has no layout 'nowhere'"),
+    ("twice", "duplicate", "it repeats fine: the same meaning on the same layout"),
+    ("look-alike", "level", "an L1 task is on a layout that looks different from every "
+                            "training layout, but same_look looks the same as default"),
+    ("backwards", "route", "'pass over blue_slab': blue_slab is not between red_slab and "
+                           "blue_label"),
+    ("far", "infeasible", "the left arm would stretch"),
+    ("new-pick", "repertoire", "new pick location: from the table at (-14.0, -18.0, 76.0) cm "
+                               "(trained: from the table at (-2.0, -4.0, 76.0) cm)"),
+    ("new-put", "repertoire", "new put location: to (-14.0, 4.5, 76.1) cm (trained: to "
+                              "(10.0, 4.5, 76.1) cm)"),
+    ("new-object", "repertoire", "new object: 4.0 x 4.0 x 5.0 cm, upright (trained: 6.0 x 6.0 "
+                                 "x 6.0 cm, upright)"),
+    ("new-pair", "repertoire", "every step is trained, but no training task performs them "
+                               "together in this order"),
 ])
 def test_each_task_gets_its_finding_with_an_explanation(findings, task_id, kind, words):
     assert [k for k, _ in findings[task_id]].count(kind) >= 1

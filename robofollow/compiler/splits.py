@@ -160,13 +160,16 @@ class _Generator:
 
     def level1(self) -> None:
         rule = self.scene.splits.get("L1")
-        for layout in rule.layouts if rule else ():
-            same = look_alike(self.scene, layout, self.scene.training_layouts)
+        for index, layout in enumerate(rule.layouts if rule else ()):
+            training = look_alike(self.scene, layout, self.scene.training_layouts)
+            earlier = look_alike(self.scene, layout, rule.layouts[:index])
             for task in self.scene.tasks:
-                if same is not None:
+                if training or earlier:
                     self.reject("L1", layout, task.paraphrases[0], task.label,
-                                f"{layout} looks the same as the training layout {same} "
-                                "(identical-looking bodies swapped at most)")
+                                f"{layout} looks the same as "
+                                + (f"the training layout {training}" if training else
+                                   f"{earlier}, earlier in the rule")
+                                + " (identical-looking bodies trade places at most)")
                     continue
                 self.consider("L1", layout, task.paraphrases[0], task.forms[0], task.label,
                               "training")

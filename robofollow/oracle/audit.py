@@ -11,6 +11,7 @@
 - routes: every body a route names is on the way from the source to the destination
   (routes.py);
 - feasibility: the expert can perform every test behaviour (feasibility.py);
+- duplicates: no test task repeats another's meaning on a layout that looks the same;
 - ambiguity: every instruction grounds to one and the same behaviour on its layout at the
   nominal positions and with the jitter at its extremes.
 """
@@ -25,12 +26,13 @@ from robofollow.compiler.feasibility import infeasible
 from robofollow.compiler.grounding import Grounder, instability
 from robofollow.compiler.lexicon import VOCABULARY
 from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
-from robofollow.compiler.observation import look_alike
+from robofollow.compiler.observation import look_alike, same_observation
 from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import Spec
 from robofollow.compiler.splits import Splits
 from robofollow.compiler.world import World, corner_worlds, jitter_worlds
-from robofollow.oracle.entropy import entropy_bits, scene_groups
+from robofollow.oracle.entropy import (behaviour_entropy_bits, entropy_bits, same_behaviours,
+                                       scene_groups)
 
 
 def _identifiers(spec: Spec) -> set[str]:
@@ -85,6 +87,33 @@ class TrainingFacts:
             found.append(f"an L2 task is on a training layout, but {layout} looks different "
                          "from every training layout")
         return found
+
+
+class SeenTasks:
+    """Test tasks seen so far, to find one that repeats another: the same scene, level and
+    logical form on a layout that looks the same (a task counted twice)."""
+
+    def __init__(self, spec: Spec):
+        self.spec = spec
+        self.seen: dict[tuple[str, str, str], list[tuple[str, str]]] = {}
+
+    def repeat(self, task_id: str, scene: str, level: str, layout: str, form: str) -> str | None:
+        entries = self.seen.setdefault((scene, level, form), [])
+        for other_layout, other in entries:
+            if other_layout == layout or same_observation(self.spec.scenes[scene], layout,
+                                                          other_layout):
+                where = ("" if other_layout == layout else
+                         f" ({layout} looks the same as {other_layout})")
+                return f"it repeats {other}: the same meaning on the same layout{where}"
+        entries.append((layout, task_id))
+        return None
+
+
+def duplicates(spec: Spec, splits: Splits) -> list[dict]:
+    seen = SeenTasks(spec)
+    found = [(task.id, seen.repeat(task.id, task.scene, task.level, task.layout,
+                                   lf.to_json(task.form))) for task in splits.tasks]
+    return [{"task": task, "finding": finding} for task, finding in found if finding]
 
 
 def _split_findings(spec: Spec, splits: Splits, check: str) -> list[dict]:
@@ -148,25 +177,32 @@ def ambiguities(spec: Spec, training: dict[str, Behaviour], splits: Splits) -> l
 def audit(spec: Spec, training: dict[str, Behaviour], splits: Splits) -> dict:
     """The audit as one JSON-ready object."""
     groups = scene_groups(spec)
+    for group in groups:
+        group["behaviours"] = same_behaviours(spec, training, group["tasks"])
     counts = {scene: {level: len(splits.of(scene, level)) for level in ("L0", "L1", "L2", "L3")}
               for scene in spec.scenes}
     return {
         "spec_digest": spec.digest,
         "scene_entropy_bits": round(entropy_bits([len(g["tasks"]) for g in groups]), 6),
+        "behaviour_entropy_bits": round(behaviour_entropy_bits(
+            [[len(b) for b in g["behaviours"]] for g in groups]), 6),
         "groups": groups,
+        "same_behaviour": [{"layout": g["layout"], "tasks": b} for g in groups
+                           for b in g["behaviours"] if len(b) > 1],
         "counts": counts,
         "leakage": leakage(spec, splits),
         "level_inconsistencies": level_inconsistencies(spec, splits),
         "repertoire_violations": repertoire_violations(spec, training, splits),
         "degenerate_routes": degenerate_route_findings(spec, splits),
         "infeasible": infeasible_tasks(spec, splits),
+        "duplicates": duplicates(spec, splits),
         "ambiguities": ambiguities(spec, training, splits),
         "rejected": len(splits.rejected),
     }
 
 
 FINDING_KEYS = ("leakage", "level_inconsistencies", "repertoire_violations", "degenerate_routes",
-                "infeasible", "ambiguities")
+                "infeasible", "duplicates", "ambiguities")
 
 
 def findings(report: dict) -> int:

@@ -13,6 +13,8 @@ route         a body the route names is not on the way from the source to the de
 infeasible    the expert cannot perform the behaviour (reach, grip, a busy arm, no free spot)
 repertoire    training does not perform the behaviour's motions (arm, action, the body's shape
               and size, pick and put locations, route, yaw), naming the parts that are new
+duplicate     it repeats an earlier task of the list: the same level and meaning on a layout
+              that looks the same
 leakage       as in the split audit: training pairs or forms, spec identifiers in the words
 level         the task is not what its level claims (L0 training pairs, L1 training
               instructions on new layouts, L2 training layouts, L3 new layouts)
@@ -39,10 +41,10 @@ from robofollow.compiler.spec_loader import spec_error
 from robofollow.compiler.splits import TestTask
 from robofollow.compiler.world import CORNERS, EXTREME_AXES, World, jitter_worlds
 from robofollow.errors import InstructionError, RoboFollowError, SpecErrors
-from robofollow.oracle.audit import TrainingFacts
+from robofollow.oracle.audit import SeenTasks, TrainingFacts
 
 FINDING_KINDS = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "route",
-                 "infeasible", "repertoire", "leakage", "level")
+                 "infeasible", "repertoire", "duplicate", "leakage", "level")
 STEP_FIELDS = ("action", "arm", "source", "relation", "target", "waypoints", "yaw_degrees")
 
 
@@ -67,6 +69,7 @@ class TaskAuditor:
     def __init__(self, spec: Spec, training: dict[str, Behaviour]):
         self.spec, self.training = spec, training
         self.facts = TrainingFacts(spec)
+        self.seen = SeenTasks(spec)
         self.repertoires = {scene.id: Repertoire(scene, training)
                             for scene in spec.scenes.values()}
         self.grounders: dict[tuple[str, str], list[Grounder]] = {}
@@ -97,6 +100,9 @@ class TaskAuditor:
             found.append(("parse", f"column {error.column}: {error.message}"))
             return Examination(found, form, behaviour)
         form_json = lf.to_json(form)
+        repeat = self.seen.repeat(task.id, task.scene, task.level, task.layout, form_json)
+        if repeat:
+            found.append(("duplicate", repeat))
         for message in self.facts.leakage(task.level, task.scene, task.layout, form_json,
                                           task.instruction):
             found.append(("leakage", message))
