@@ -54,7 +54,7 @@ FULL = exactly(1.0)
 S1_PICK = "scene1/L0/pickup_yellow_block_1_left#r1"  # left arm, yellow_block_1
 S1_BEHIND = "scene1/L0/place_yellow_block_1_behind_red_cylinder#r1"  # right arm
 S1_LEFT_OF = "scene1/L0/place_yellow_block_2_left_of_red_sphere#r1"  # left arm
-S1_L1 = "scene1/L1/place_yellow_block_1_beside_red_cylinder@scene1_1#r1"  # yellow_block_3 now
+S1_L1 = "scene1/L1/place_yellow_block_1_beside_red_cylinder@scene1_2#r1"  # yellow_block_3 now
 S1_L2 = "scene1/L2/place_yellow_block_2_left_of_red_sphere@default/referents-f4c39c60#r1"
 S1_L3 = "scene1/L3/place_yellow_block_1_behind_red_cylinder@scene1_2/referents-9bd0f83d#r1"
 S2_PICK = "scene2/L0/pickup_right_cube#r1"  # left arm, small_red_cube
@@ -70,7 +70,7 @@ S3_VIA = "scene3/L0/r_pick2_via4_to6_short_front#r1"  # red -> blue label over y
 S3_AVOID = "scene3/L0/l_pick5_around2_to1_short_right#r1"  # blue -> green label, not over red
 S3_L1 = "scene3/L1/r_pick2_via4_to6_short_front@scene3_2#r1"  # yellow and blue swapped
 S3_L2_AVOID = "scene3/L2/r_pick2_via4_to6_short_front@default/routes-cfa91afc#r1"
-S3_L3_AVOID = "scene3/L3/l_pick4_around2_to1_short_right@scene3_1/orientation-82041527#r1"
+S3_L3_AVOID = "scene3/L3/l_pick4_around2_to1_short_right@scene3_1/orientation-71c3420f#r1"
 S4_IF = "scene4/L0/s41_if_bowl_nonempty_then_l_pick_blue_else_r_stack#r1"  # then: left blue
 S4_SEQ = "scene4/L0/s41_seq_l_bowl_then_r_green_cylinder#r1"
 S4_UNSTACK = "scene4/L0/s41_r_unstack_green_cylinder_to_slot6#r1"
@@ -79,7 +79,7 @@ S4_PICK = "scene4/L0/s41_l_pick_blue_sphere#r1"
 S4_BOWL_CUBE = "scene4/L0/s41_l_pick_cube_in_bowl#r1"
 S4_L1_IF = "scene4/L1/s41_if_bowl_nonempty_then_l_pick_blue_else_r_stack@scene4_5#r1"
 S4_L2_SEQ = "scene4/L2/s41_seq_r_green_cylinder_then_l_bowl@scene4_1/referents-6c27dab6#r1"
-S4_L3_PICK = "scene4/L3/s41_l_pick_ball_not_leftmost@scene4_5/referents-881bbf32#r1"
+S4_L3_PICK = "scene4/L3/s41_l_pick_blue_sphere@scene4_5/referents-338d5bef#r1"
 
 
 def pick(arm: str, source: str) -> Behaviour:
@@ -233,12 +233,8 @@ CASES = [
          lambda s: s.sweep("right", s.at("red_cylinder")[1], 0.22, -0.25), NOTHING, NOTHING,
          False, "pushing is not picking: nothing asked was done"),
     Case("s1 L1: the training motion on the changed layout (wrong block)", S1_L1,
-         lambda s: s.perform(place("right", "yellow_block_1", "right_of", "green_sphere")),
-         NOTHING, NOTHING, False, "the described block moved; the old spot holds another one"),
-    Case("s1 L1: picks the block up and holds it (it already stood behind the cylinder)",
-         "scene1/L1/place_yellow_block_1_behind_red_cylinder@scene1_3#r1",
-         lambda s: s.perform(pick("right", "yellow_block_1")), exactly(0.4), exactly(0.4),
-         False, "lifting it where it stands is not placing it anywhere"),
+         lambda s: s.perform(place("right", "yellow_block_1", "right_of", "red_cylinder")),
+         NOTHING, NOTHING, False, "the red ball moved: the block to its right is another one"),
     Case("s1 picks the block and puts it back where it was", S1_BEHIND,
          lambda s: s.pick("right", "yellow_block_1").put_back("right"), exactly(0.4),
          exactly(0.4), False, "grasped and lifted (the source stage), not carried anywhere"),
@@ -410,13 +406,17 @@ CASES = [
     Case("s4 unstacked to the wrong side", S4_UNSTACK,
          lambda s: s.perform(s.variant(relation="behind")), exactly(0.4), exactly(0.4), False,
          "right object, wrong relation"),
+    Case("s4 L1: lifts the cylinder off the cube and holds it (it already stood to the right)",
+         "scene4/L1/s42_r_unstack_green_cylinder_to_slot6@scene4_5#r1",
+         lambda s: s.perform(pick("right", "green_cylinder")), exactly(0.4), exactly(0.4),
+         False, "lifting it where it stands is not placing it anywhere"),
     Case("s4 stacked 4.5 cm off centre: it falls", S4_STACK,
          put_near("right", "green_cylinder", "yellow_cylinder", 0.045, 0.0,
                   on="yellow_cylinder", above=0.0), at_most(1.0), exactly(0.4), False,
          "aimed at the right target, did not stay on it"),
     Case("s4 L3: picks the sphere at the training position (the wrong one)", S4_L3_PICK,
          lambda s: s.perform(pick("left", "red_sphere")), NOTHING, NOTHING, False,
-         "the spheres swapped; 'not leftmost' now means the blue one"),
+         "the spheres swapped; the red one stands where training picks the blue one"),
 ]
 
 

@@ -1,8 +1,8 @@
 """Whether the expert can perform a behaviour on a layout, decided from geometry alone (no
 physics), before anything is simulated:
 
-- every point of the expert's plan lies within its arm's reach (workspace.py), at the
-  nominal positions and with the jitter at its extremes;
+- every point of the expert's plan at the nominal positions lies within its arm's reach
+  (workspace.py), with room to spare for the layout's largest jitter offset;
 - every body to grip fits the open gripper;
 - no arm is asked to act while it still holds what an earlier step picked up;
 - nothing rests on a body to move;
@@ -12,6 +12,8 @@ physics), before anything is simulated:
 
 from __future__ import annotations
 
+import math
+
 from robofollow.compiler import workspace
 from robofollow.compiler.behaviour import Behaviour, describe_steps
 from robofollow.compiler.plans import place_spot, plan
@@ -20,14 +22,10 @@ from robofollow.compiler.world import World
 ROLLING = ("sphere",)  # kinds nothing can be stacked on
 
 
-def infeasible(behaviour: Behaviour, worlds: list[World]) -> list[str]:
-    """Why the expert cannot perform `behaviour` (empty: it can). `worlds` are one layout at
-    its nominal positions first, then at jitter extremes."""
-    nominal = worlds[0]
-    problems = _holding(behaviour) + _handling(behaviour, nominal)
-    for world in worlds:
-        problems += [p for p in _reach(behaviour, world) if p not in problems]
-    return problems
+def infeasible(behaviour: Behaviour, world: World) -> list[str]:
+    """Why the expert cannot perform `behaviour` on a layout at its nominal positions (empty:
+    it can)."""
+    return _holding(behaviour) + _handling(behaviour, world) + _reach(behaviour, world)
 
 
 def _holding(behaviour: Behaviour) -> list[str]:
@@ -71,10 +69,15 @@ def _handling(behaviour: Behaviour, world: World) -> list[str]:
 def _reach(behaviour: Behaviour, world: World) -> list[str]:
     if any(step.arm is None for step in behaviour.steps):
         return []
+    scene, slack = world.scene, 0.0
+    for body, placed in world.layout.placed.items():
+        if placed.support is None:
+            jitter = scene.jitter_of(body)
+            slack = max(slack, math.hypot(max(map(abs, jitter.x)), max(map(abs, jitter.y))))
     problems = []
     for point in plan(behaviour, world).points:
         if point.position is not None:
-            problem = workspace.reach_problem(point.arm, point.position, world.table)
+            problem = workspace.reach_problem(point.arm, point.position, world.table, slack)
             if problem:
                 problems.append(f"{point.name}: {problem}")
     return problems

@@ -28,7 +28,7 @@ from robofollow.compiler.realize import STYLES, realize
 from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import Level, Scene, Spec
 from robofollow.compiler.wordings import GENERATORS, Describer, concepts
-from robofollow.compiler.world import CORNERS, jitter_worlds
+from robofollow.compiler.world import jitter_worlds
 
 
 class TestTask(Model):
@@ -66,6 +66,10 @@ def episode_seed(task_id: str, round_index: int, base: int) -> int:
     return base + 100 * round_index + offset
 
 
+def _digest_of(task_id: str) -> str:
+    return hashlib.sha256(task_id.encode()).hexdigest()
+
+
 def _variants(form: lf.Instruction, describer: Describer, wordings: tuple[str, ...]):
     """(wording, form) from each generator alone, then from each ordered pair of the
     generators that reword one aspect ('referents' alone already varies every object)."""
@@ -93,7 +97,6 @@ class _Generator:
         self.seen: dict[tuple[str, str], str] = {}
         self.grounders: dict[str, list[Grounder]] = {}  # per layout: nominal, then jittered
         self.describers: dict[str, Describer] = {}
-        self.kept: dict[tuple[str, str], int] = {}  # (level, origin) -> tasks kept so far
 
     def reject(self, level: Level, layout: str, instruction: str, origin: str,
                reason: str) -> None:
@@ -110,43 +113,44 @@ class _Generator:
         return behaviour.model_copy(update={"steps": steps})
 
     def consider(self, level: Level, layout: str, instruction: str, form: lf.Instruction,
-                 origin: str, wording: str, task_id: str | None = None) -> None:
+                 origin: str, wording: str, task_id: str | None = None) -> bool:
+        """Keep the candidate as a test task, or reject it with the reason; whether kept."""
         key = (layout, instruction if wording == "training" else lf.to_json(form))
         if key in self.seen:
             self.reject(level, layout, instruction, origin, f"duplicate of {self.seen[key]}")
-            return
+            return False
         nominal = self.grounders_of(layout)[0]
         world = nominal.world
         try:
             behaviour = self.fill_arms(nominal.behaviour(form), origin)
         except GroundingError as error:
             self.reject(level, layout, instruction, origin, f"{error.code}: {error.message}")
-            return
+            return False
         degenerate = [p for step in behaviour.steps for p in degenerate_routes(step, world)]
         if degenerate:
             self.reject(level, layout, instruction, origin,
                         f"degenerate route: {'; '.join(degenerate)}")
-            return
+            return False
         missing = self.repertoire.missing(behaviour, world, compose=level in COMPOSING_LEVELS)
         if missing:
             self.reject(level, layout, instruction, origin,
                         f"outside the training repertoire: {missing}")
-            return
-        problems = infeasible(behaviour, [g.world for g in self.grounders_of(layout)[:1 + len(CORNERS)]])
+            return False
+        problems = infeasible(behaviour, world)
         if problems:
             self.reject(level, layout, instruction, origin, f"infeasible: {'; '.join(problems)}")
-            return
+            return False
         unstable = instability(form, self.grounders_of(layout)[1:], behaviour, first_case=1)
         if unstable:
             self.reject(level, layout, instruction, origin, unstable)
-            return
+            return False
         if task_id is None:
             task_id = f"{self.scene.id}/{level}/{origin}" + ("" if level == "L0" else f"@{layout}")
         self.seen[key] = task_id
-        self.kept[level, origin] = self.kept.get((level, origin), 0) + 1
         self.tasks.append(TestTask(id=task_id, scene=self.scene.id, level=level, layout=layout,
                                    instruction=instruction, form=form, behaviour=behaviour,
                                    origin=origin, wording=wording))
+        return True
 
     def grounders_of(self, layout: str) -> list[Grounder]:
         if layout not in self.grounders:  # the corner worlds come first
@@ -177,15 +181,22 @@ class _Generator:
 
     def reworded(self, level: Level, layout: str, form: lf.Instruction, origin: str,
                  wordings: tuple[str, ...]) -> None:
-        """Candidates from each generator, and from each pair of generators in rule order."""
+        """Candidates from each generator, and from each pair of generators in rule order,
+        considered in the order the cap ranks them (id digest) until the rule's `max` are kept:
+        the cap could choose none after those."""
         if layout not in self.describers:
             self.describers[layout] = Describer(self.grounders_of(layout)[0])
-        rule = self.scene.splits[level]
+        candidates = []
         for wording, novel in _variants(form, self.describers[layout], wordings):
-            if rule.max_tasks is not None and self.kept.get((level, origin), 0) >= rule.max_tasks:
-                return  # this origin alone fills the level; the cap would drop the rest
             data = lf.to_json(novel)
             digest = hashlib.sha256(data.encode()).hexdigest()
+            task_id = f"{self.scene.id}/{level}/{origin}@{layout}/{wording}-{digest[:8]}"
+            candidates.append((_digest_of(task_id), task_id, wording, novel, data, digest))
+        limit = self.scene.splits[level].max_tasks
+        kept = 0
+        for _, task_id, wording, novel, data, digest in sorted(candidates, key=lambda c: c[:2]):
+            if limit is not None and kept >= limit:
+                return
             text, unknown = self.speak(novel, int(digest[:8], 16))
             if data in self.training_forms:
                 self.reject(level, layout, text, origin, "a training task has this form")
@@ -194,9 +205,7 @@ class _Generator:
                 self.reject(level, layout, text, origin, f"words no training instruction "
                                                          f"uses: {words}")
             else:
-                self.consider(level, layout, text, novel, origin, wording,
-                              f"{self.scene.id}/{level}/{origin}@{layout}/{wording}-"
-                              f"{digest[:8]}")
+                kept += self.consider(level, layout, text, novel, origin, wording, task_id)
 
     def speak(self, form: lf.Instruction, pick: int) -> tuple[str, set]:
         """English for a form in the first style (from `pick` on) that uses only training
@@ -212,20 +221,21 @@ class _Generator:
         return first
 
     def cap(self, level: Level) -> None:
-        """Keep at most the rule's `max` tasks of a level: round robin over the training tasks
-        they come from (each origin's tasks in id-digest order); reject the rest."""
+        """Keep at most the rule's `max` tasks of a level, spread over the (training task,
+        layout) pairs they come from: a task ranks by its place in its pair's queue (ordered
+        by id digest), then by its own id digest. The ranks do not depend on other tasks, so a
+        new task or layout displaces only as many tests as it gets; the rest are rejected."""
         rule = self.scene.splits.get(level)
         tasks = [t for t in self.tasks if t.level == level]
         if rule is None or rule.max_tasks is None or len(tasks) <= rule.max_tasks:
             return
-        queues: dict[str, list[TestTask]] = {}
-        for task in sorted(tasks, key=lambda t: hashlib.sha256(t.id.encode()).hexdigest()):
-            queues.setdefault(task.origin, []).append(task)
-        chosen: set[str] = set()
-        while len(chosen) < rule.max_tasks:
-            for origin in sorted(queues):
-                if queues[origin] and len(chosen) < rule.max_tasks:
-                    chosen.add(queues[origin].pop(0).id)
+        queues: dict[tuple[str, str], int] = {}
+        ranked = []
+        for task in sorted(tasks, key=lambda t: (_digest_of(t.id), t.id)):
+            pair = task.origin, task.layout
+            queues[pair] = queues.get(pair, -1) + 1
+            ranked.append(((queues[pair], _digest_of(task.id)), task.id))
+        chosen = {task_id for _, task_id in sorted(ranked)[:rule.max_tasks]}
         for task in tasks:
             if task.id not in chosen:
                 self.reject(level, task.layout, task.instruction, task.origin,

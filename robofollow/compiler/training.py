@@ -13,7 +13,7 @@ from robofollow.compiler.feasibility import infeasible
 from robofollow.compiler.grounding import GroundingError, ground
 from robofollow.compiler.spec import Expected, Scene, Spec, Task
 from robofollow.compiler.spec_loader import spec_error
-from robofollow.compiler.world import World, corner_worlds
+from robofollow.compiler.world import World
 from robofollow.errors import SpecError, SpecErrors
 
 
@@ -84,7 +84,7 @@ def check_training(spec: Spec) -> dict[str, Behaviour]:
                         "expect-mismatch", f"the instructions mean {describe(behaviour)}, but "
                         f"expect says {describe(expected)}", task.source, len(task.label)))
                     continue
-            problems = infeasible(behaviour, corner_worlds(scene, task.layout))
+            problems = infeasible(behaviour, World(scene, task.layout))
             if problems:
                 errors.append(spec_error("infeasible", "the expert cannot do this: "
                                          + "; ".join(problems), task.source, len(task.label)))

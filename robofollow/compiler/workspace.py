@@ -35,17 +35,21 @@ def table_bounds() -> tuple[float, float, float, float]:
     return -hx, hx, TABLE_CENTRE_Y - hy, TABLE_CENTRE_Y + hy
 
 
-def reach_problem(arm: str, point: tuple[float, float, float], table: float) -> str | None:
-    """Why a top-down grasp centre at `point` is out of `arm`'s reach (None: reachable)."""
+def reach_problem(arm: str, point: tuple[float, float, float], table: float,
+                  slack: float = 0.0) -> str | None:
+    """Why a top-down grasp centre at `point`, or anywhere within `slack` of it in the plane,
+    is out of `arm`'s reach (None: reachable)."""
     base_x, base_y = BASE_XY[arm]
-    planar = math.hypot(point[0] - base_x, point[1] - base_y)
+    planar = math.hypot(point[0] - base_x, point[1] - base_y) + slack
     rise = point[2] + WRIST_TO_GRASP - (table + SHOULDER_HEIGHT)
     stretch = math.hypot(planar, rise)
     if stretch > REACH:
         return (f"the {arm} arm would stretch {100 * stretch:.1f} cm to "
-                f"({', '.join(f'{100 * v:.1f}' for v in point)}) cm, beyond its "
-                f"{100 * REACH:.1f} cm reach")
-    if planar < MIN_REACH:
-        return (f"({', '.join(f'{100 * v:.1f}' for v in point)}) cm is {100 * planar:.1f} cm "
-                f"from the {arm} arm's base, closer than {100 * MIN_REACH:g} cm")
+                f"({', '.join(f'{100 * v:.1f}' for v in point)}) cm"
+                + (" with the jitter" if slack else "") + f", beyond its {100 * REACH:.1f} cm "
+                "reach")
+    if planar - 2 * slack < MIN_REACH:
+        return (f"({', '.join(f'{100 * v:.1f}' for v in point)}) cm comes "
+                f"{100 * (planar - 2 * slack):.1f} cm from the {arm} arm's base, closer than "
+                f"{100 * MIN_REACH:g} cm")
     return None

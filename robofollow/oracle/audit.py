@@ -30,7 +30,7 @@ from robofollow.compiler.observation import look_alike, same_observation
 from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import Spec
 from robofollow.compiler.splits import Splits
-from robofollow.compiler.world import World, corner_worlds, jitter_worlds
+from robofollow.compiler.world import World, jitter_worlds
 from robofollow.oracle.entropy import (behaviour_entropy_bits, entropy_bits, same_behaviours,
                                        scene_groups)
 
@@ -147,8 +147,7 @@ def repertoire_violations(spec: Spec, training: dict[str, Behaviour],
 
 def infeasible_tasks(spec: Spec, splits: Splits) -> list[dict]:
     return [{"task": task.id, "finding": problem} for task in splits.tasks
-            for problem in infeasible(task.behaviour,
-                                      corner_worlds(spec.scenes[task.scene], task.layout))]
+            for problem in infeasible(task.behaviour, World(spec.scenes[task.scene], task.layout))]
 
 
 def degenerate_route_findings(spec: Spec, splits: Splits) -> list[dict]:

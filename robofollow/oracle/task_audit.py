@@ -39,7 +39,7 @@ from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import LEVELS, Spec
 from robofollow.compiler.spec_loader import spec_error
 from robofollow.compiler.splits import TestTask
-from robofollow.compiler.world import CORNERS, EXTREME_AXES, World, jitter_worlds
+from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
 from robofollow.errors import InstructionError, RoboFollowError, SpecErrors
 from robofollow.oracle.audit import SeenTasks, TrainingFacts
 
@@ -134,7 +134,7 @@ class TaskAuditor:
         found += [("route", problem) for step in behaviour.steps
                   for problem in degenerate_routes(step, world)]
         found += [("infeasible", problem) for problem in
-                  infeasible(behaviour, [g.world for g in grounders[:1 + len(CORNERS)]])]
+                  infeasible(behaviour, grounders[0].world)]
         missing = self.repertoires[scene.id].missing(behaviour, world,
                                                      compose=task.level in COMPOSING_LEVELS)
         if missing:
@@ -315,7 +315,8 @@ def task_list(splits) -> list[dict]:
             for t in splits.tasks]
 
 
-FATAL = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "infeasible")  # for a listed test
+# what stops a listed test
+FATAL = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "infeasible")
 
 
 def listed_tests(spec: Spec, training: dict[str, Behaviour]) -> tuple[TestTask, ...]:

@@ -120,7 +120,8 @@ def scene_xml(scene: Scene, layout: str, width: int = 320, height: int = 240) ->
              "hx": half[0], "hy": half[1], "hz": half[2]}
     base_quat = _fmt((math.cos(robot.BASE_YAW / 2), 0, 0, math.sin(robot.BASE_YAW / 2)))
     arms = [{"side": side, "quat": base_quat,
-             "pos": _fmt((*workspace.BASE_XY[side], scene.table_height))} for side in workspace.ARMS]
+             "pos": _fmt((*workspace.BASE_XY[side], scene.table_height))}
+            for side in workspace.ARMS]
     cameras = [{"name": c.name, "pos": _fmt(c.position), "xyaxes": _xyaxes(c), "fovy": c.fovy,
                 "orthographic": c.orthographic} for c in CAMERAS]
     return _template().render(
