@@ -113,7 +113,7 @@ def find_episode(compiled: Compiled, episode_id: str) -> dict:
                               f"like scene1/L0/pickup_yellow_block_2#r1){hint}")
 
 
-def summary(compiled: Compiled) -> str:
+def summary(compiled: Compiled, changes: str = "") -> str:
     report, spec = compiled.report, compiled.spec
     lines = [f"RoboFollow: {len(spec.scenes)} scenes, {len(spec.tasks)} training tasks, "
              f"spec digest {spec.digest[:12]}",
@@ -124,6 +124,7 @@ def summary(compiled: Compiled) -> str:
              "          " + "".join(f"{level:>6}" for level in LEVELS)]
     for scene, counts in report["counts"].items():
         lines.append(f"{scene:<10}" + "".join(f"{counts[level]:>6}" for level in LEVELS))
+    lines += _rules_text(report["split_rules"])
     same = report["same_behaviour"]
     lines += ["", f"training tasks with the same behaviour on one layout: {len(same) or 'none'}"]
     lines += [f"  {item['layout']}: {', '.join(item['tasks'])}" for item in same]
@@ -133,11 +134,57 @@ def summary(compiled: Compiled) -> str:
         items = report[key]
         lines.append(f"{title}: {len(items) or 'none'}")
         lines += [f"  {item['task']}: {item['finding']}" for item in items[:20]]
+    return "\n".join(lines) + "\n" + changes
+
+
+def _rules_text(rules: dict) -> list[str]:
+    """Tasks per layout, what each cap dropped and the rules' warnings, for people."""
+    lines = ["", "test tasks per layout:"]
+    for scene, levels in rules["layouts"].items():
+        lines.append(f"  {scene:<12}" + "".join(f"{level:>6}" for level in LEVELS))
+        for layout in dict.fromkeys(name for level in LEVELS for name in levels.get(level, {})):
+            lines.append(f"    {layout:<10}" + "".join(
+                f"{levels.get(level, {}).get(layout, '.'):>6}" for level in LEVELS))
+    lines.append(f"caps: {'none applied' if not rules['capped'] else ''}".rstrip())
+    lines += [f"  {c['scene']} {c['level']}: {c['kept']} kept (max {c['max']}), {c['dropped']} "
+              "dropped ("
+              + ", ".join(f"{layout} {n}" for layout, n in c["dropped_by_layout"].items()) + ")"
+              for c in rules["capped"]]
+    lines.append(f"split rule warnings: {len(rules['warnings']) or 'none'}")
+    lines += [f"  {warning}" for warning in rules["warnings"]]
+    return lines
+
+
+def _task_ids(out: Path) -> set[str]:
+    """The test task ids of the build in `out`, if there is one."""
+    ids = set()
+    for path in sorted((out / "tasks").glob("*.jsonl")) if (out / "tasks").is_dir() else ():
+        with open(path, encoding="utf-8") as lines:
+            ids.update(json.loads(line)["task"] for line in lines if line.strip())
+    return ids
+
+
+def changes(before: set[str], compiled: Compiled, shown: int = 20) -> str:
+    """Which test tasks a build adds and removes against the ids of a previous one."""
+    if not before:
+        return ""
+    after = {t.id for t in compiled.splits.tasks}
+    added, removed = sorted(after - before), sorted(before - after)
+    if not added and not removed:
+        return "\nagainst the previous build: the same test tasks\n"
+    lines = ["", f"against the previous build: {len(added)} test tasks added, {len(removed)} "
+                 "removed"]
+    lines += [f"  + {task}" for task in added[:shown]]
+    lines += [f"  - {task}" for task in removed[:shown]]
+    if max(len(added), len(removed)) > shown:
+        lines.append(f"  (the first {shown} of each)")
     return "\n".join(lines) + "\n"
 
 
-def write(compiled: Compiled, out: Path) -> None:
-    """Write every output file under `out` (created if needed)."""
+def write(compiled: Compiled, out: Path) -> str:
+    """Write every output file under `out` (created if needed); what changed against the
+    build that was there, in words."""
+    changed = changes(_task_ids(out), compiled)
     (out / "episodes").mkdir(parents=True, exist_ok=True)
     (out / "tasks").mkdir(parents=True, exist_ok=True)
     for scene in compiled.spec.scenes:
@@ -159,7 +206,8 @@ def write(compiled: Compiled, out: Path) -> None:
         f.writelines(_line(r.model_dump(mode="json")) for r in compiled.splits.rejected)
     (out / "audit.json").write_text(json.dumps(compiled.report, indent=1, sort_keys=True) + "\n",
                                     encoding="utf-8")
-    (out / "summary.txt").write_text(summary(compiled), encoding="utf-8")
+    (out / "summary.txt").write_text(summary(compiled, changed), encoding="utf-8")
+    return changed
 
 
 def clean(compiled: Compiled) -> bool:

@@ -78,8 +78,8 @@ def cmd_compile(args) -> int:
     from robofollow.build import clean, compile_specs, summary, write
 
     compiled = compile_specs(Path(args.specs))
-    write(compiled, Path(args.out))
-    print(summary(compiled), end="")
+    changed = write(compiled, Path(args.out))
+    print(summary(compiled, changed), end="")
     print(f"written to {args.out}")
     return 0 if clean(compiled) else 1
 

@@ -55,6 +55,7 @@ any_text = st.text(max_size=80)
 _SLOTS = [(x, y) for y in (-0.06, -0.18) for x in (-0.14, -0.02, 0.10)]
 _SIZES = {"cube": "half=0.02", "cylinder": "radius=0.02 half_height=0.025",
           "sphere": "radius=0.02"}
+_RGB = {"red": "(1, 0, 0)", "green": "(0, 0.8, 0)", "blue": "(0, 0, 1)", "yellow": "(1, 1, 0)"}
 _PLACEMENTS = {"behind": "behind", "in_front_of": "in front of", "left_of": "to the left of",
                "right_of": "to the right of"}
 
@@ -70,7 +71,7 @@ def small_specs(draw) -> tuple[str, list[int]]:
     lines = ['scene demo "Random" {', "    jitter * x=[-0.01, 0.01] y=[-0.01, 0.01]"]
     for index, (kind, colour) in enumerate(objects):
         lines.append(f"    object o{index} {kind} {_SIZES[kind]} color={colour} "
-                     f"rgb=(0.5, 0.5, 0.5) mass=0.2 friction=0.5")
+                     f"rgb={_RGB[colour]} mass=0.2 friction=0.5")
     lines.append("    layout base {")
     lines += [f"        o{i} at ({_SLOTS[s][0]}, {_SLOTS[s][1]})" for i, s in enumerate(slots)]
     lines.append("    }")
@@ -78,14 +79,15 @@ def small_specs(draw) -> tuple[str, list[int]]:
                              .filter(lambda p: p[0] != p[1]), min_size=1, max_size=2))
     for index, (a, b) in enumerate(variants):
         lines.append(f"    layout v{index} from base {{ swap o{a} o{b} }}")
-    tasks = draw(st.lists(st.tuples(st.sampled_from(["left", "right"]),
-                                    st.integers(0, count - 1),
+    tasks = draw(st.lists(st.tuples(st.integers(0, count - 1),
                                     st.one_of(st.none(), st.tuples(st.integers(0, count - 1),
                                                                    st.sampled_from(sorted(_PLACEMENTS))))),
                           min_size=1, max_size=5))
     name = lambda i: f"the {objects[i][1]} {objects[i][0]}"  # noqa: E731
-    for index, (arm, source, place) in enumerate(tasks):
-        text = f"Use your {arm} arm to pick up {name(source)}"
+    for index, (source, place) in enumerate(tasks):
+        # the arm on the side of where the object goes, as an author would choose it
+        x = _SLOTS[slots[place[0] if place else source]][0]
+        text = f"Use your {'left' if x < 0 else 'right'} arm to pick up {name(source)}"
         if place is not None and place[0] != source:
             text += f" and place it {_PLACEMENTS[place[1]]} {name(place[0])}"
         lines += [f"    task t{index} on base {{", f'        "{text}."', "    }"]

@@ -8,6 +8,7 @@ import pytest
 
 from robofollow.compiler import workspace
 from robofollow.compiler.spec_loader import load_spec
+from robofollow.errors import SpecErrors
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES, Cameras
 from robofollow.sim.simulation import STABLE_DRIFT, Simulation, UnstableLayoutError
@@ -65,7 +66,7 @@ UNSTABLE = """\
 scene wobbly "A cube beyond the table's edge" {
     object box cube half=0.02 color=blue rgb=(0, 0, 1) mass=0.2 friction=0.5
     layout edge {
-        box at (0.0, 0.31)
+        box at (0.0, 0.2)
     }
     task pick_box on edge {
         "Pick up the blue cube with your left arm."
@@ -76,8 +77,18 @@ scene wobbly "A cube beyond the table's edge" {
 
 
 def test_an_infeasible_layout_fails_naming_the_object(tmp_path):
+    """The compiler refuses a body off the table; a layout that slips past it (built here by
+    hand) still fails in the simulator, naming the body."""
+    (tmp_path / "wobbly.rf").write_text(UNSTABLE.replace("(0.0, 0.2)", "(0.0, 0.31)"))
+    with pytest.raises(SpecErrors) as refused:
+        load_spec(tmp_path)
+    assert "box at (0, 0.31) can leave the table" in refused.value.errors[0].message
     (tmp_path / "wobbly.rf").write_text(UNSTABLE)
-    scene = load_spec(tmp_path).scenes["wobbly"]  # the table's far edge is at y = 0.30
+    scene = load_spec(tmp_path).scenes["wobbly"]
+    layout = scene.layouts["edge"]
+    beyond = layout.model_copy(update={"placed": {"box": layout.placed["box"].model_copy(
+        update={"y": 0.31})}})  # the table's far edge is at y = 0.30
+    scene = scene.model_copy(update={"layouts": {"edge": beyond}})
     with pytest.raises(UnstableLayoutError, match=r"wobbly/edge is not stable: box moved"):
         Simulation(scene, "edge").reset(0)
 

@@ -29,6 +29,7 @@ from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
 from robofollow.compiler.observation import look_alike, same_observation
 from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import Spec
+from robofollow.compiler.split_report import rule_report
 from robofollow.compiler.splits import Splits
 from robofollow.compiler.world import World, jitter_worlds
 from robofollow.oracle.entropy import (behaviour_entropy_bits, entropy_bits, same_behaviours,
@@ -197,6 +198,7 @@ def audit(spec: Spec, training: dict[str, Behaviour], splits: Splits) -> dict:
         "duplicates": duplicates(spec, splits),
         "ambiguities": ambiguities(spec, training, splits),
         "rejected": len(splits.rejected),
+        "split_rules": rule_report(spec, splits),
     }
 
 
