@@ -12,36 +12,16 @@ from __future__ import annotations
 
 import argparse
 import json
-import multiprocessing
 import sys
 import time
 from collections import defaultdict
 from pathlib import Path
 
-from tqdm import tqdm
-
 from robofollow.build import all_episodes, compile_specs
 from robofollow.compiler.spec import LEVELS
+from robofollow.eval.verify import run_expert_episodes
 
 ROOT = Path(__file__).resolve().parent.parent
-_SCENES = {}
-
-
-def _init(specs: str) -> None:
-    _SCENES.update(compile_specs(Path(specs)).spec.scenes)
-
-
-def _run(episode: dict) -> dict:
-    from robofollow.sim.rollout import run_expert
-
-    try:
-        result = run_expert(_SCENES[episode["scene"]], episode).summary()
-    except Exception as error:  # a crash is a failure with its cause, not a lost episode
-        result = {"episode": episode["episode"], "achieved": False, "steps": 0, "seconds": 0.0,
-                  "intent_score": 0.0, "execution_score": 0.0,
-                  "reasons": [f"{type(error).__name__}: {error}"]}
-    full = result["achieved"] and min(result["intent_score"], result["execution_score"]) >= 0.99
-    return dict(result, full=full, scene=episode["scene"], level=episode["level"])
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -59,9 +39,7 @@ def main(argv: list[str] | None = None) -> int:
             and (not scenes or e["scene"] in scenes)
             and (args.rounds is None or e["round"] <= args.rounds)]
     began = time.perf_counter()
-    with multiprocessing.get_context("spawn").Pool(args.workers, _init, (args.specs,)) as pool:
-        results = list(tqdm(pool.imap_unordered(_run, todo, chunksize=4), total=len(todo),
-                            desc="expert episodes", unit="ep", mininterval=10))
+    results = run_expert_episodes(Path(args.specs), todo, args.workers)
     wall = time.perf_counter() - began
     cells: dict[tuple[str, str], list[bool]] = defaultdict(list)
     for result in results:
@@ -90,8 +68,7 @@ def main(argv: list[str] | None = None) -> int:
     for failure in failures:
         print(f"  {failure['episode']}: {'; '.join(failure['reasons'])}")
     if args.json:
-        Path(args.json).write_text(json.dumps(sorted(results, key=lambda r: r["episode"]),
-                                              indent=1) + "\n")
+        Path(args.json).write_text(json.dumps(results, indent=1) + "\n")
     return 0 if 100 * total / len(results) >= 99 and worst >= 97 else 1
 
 

@@ -81,7 +81,26 @@ def cmd_compile(args) -> int:
     changed = write(compiled, Path(args.out))
     print(summary(compiled, changed), end="")
     print(f"written to {args.out}")
-    return 0 if clean(compiled) else 1
+    verified = _verify(compiled, Path(args.specs), args.verify, args.workers) if args.verify \
+        else True
+    return 0 if clean(compiled) and verified else 1
+
+
+def _verify(compiled, specs: Path, rounds: int, workers: int | None) -> bool:
+    """The expert on the first `rounds` rounds of every test task; failures listed."""
+    from robofollow.build import all_episodes
+    from robofollow.eval.verify import run_expert_episodes
+
+    episodes = [e for e in all_episodes(compiled) if e["round"] <= rounds]
+    print(f"\nverifying: the expert on {len(episodes)} episodes ({rounds} round"
+          f"{'s' if rounds > 1 else ''} of every test task) in simulation")
+    results = run_expert_episodes(specs, episodes, workers or os.cpu_count() or 1)
+    failures = [r for r in results if not r["full"]]
+    print(f"the expert scored in full on {len(results) - len(failures)} of {len(results)}; "
+          f"failures: {len(failures) or 'none'}")
+    for failure in failures:
+        print(f"  {failure['episode']}: {'; '.join(failure['reasons'])}")
+    return not failures
 
 
 def cmd_audit(args) -> int:
@@ -464,6 +483,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("specs", nargs="?", default="specs",
                    help="a spec file or a folder of .rf files (default: specs)")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    p.add_argument("--verify", type=int, nargs="?", const=1, default=0, metavar="ROUNDS",
+                   help="then run the scripted expert on the first ROUNDS rounds (default 1) "
+                        "of every test task in simulation and list the episodes it does not "
+                        "score in full, with the stages lost (exit status 1 if any)")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="simulation workers for --verify (default: the number of CPUs)")
     p.set_defaults(handler=cmd_compile)
 
     p = commands.add_parser(

@@ -59,3 +59,33 @@ def test_render_unknown_layout(capsys, tmp_path):
     status, _, err = run(capsys, "render", "--scene", "scene3", "--layout", "nowhere", "-o",
                          str(tmp_path / "x.png"), "--specs", SPECS)
     assert status == 1 and "has no layout 'nowhere'" in err and "scene3_1" in err
+
+
+SLIPPERY = """\
+scene tiny "Two cubes, one too heavy and slippery to lift" {
+    object red_cube  cube half=0.02 color=red  rgb=(1, 0, 0) mass=0.2 friction=0.5
+    object blue_cube cube half=0.02 color=blue rgb=(0, 0, 1) mass=5.0 friction=0.01
+    layout base {
+        red_cube  at (-0.08, -0.10)
+        blue_cube at (0.08, -0.10)
+    }
+    task pick_red on base {
+        "Use your left arm to pick up the red cube."
+    }
+    task pick_blue on base {
+        "Use your right arm to pick up the blue cube."
+    }
+}
+"""
+
+
+def test_compile_verify_lists_what_only_simulation_finds(capsys, tmp_path):
+    """Both tasks are feasible by geometry; the expert cannot lift the slippery cube."""
+    (tmp_path / "specs").mkdir()
+    (tmp_path / "specs" / "tiny.rf").write_text(SLIPPERY)
+    status, out, _ = run(capsys, "compile", str(tmp_path / "specs"), "--out",
+                         str(tmp_path / "build"), "--verify", "--workers", "1")
+    assert status == 1
+    assert "verifying: the expert on 2 episodes (1 round of every test task)" in out
+    assert "the expert scored in full on 1 of 2; failures: 1" in out
+    assert "tiny/L0/pick_blue#r1: source: grasped blue_cube" in out and "but lifted it" in out
