@@ -22,11 +22,11 @@ from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.goals import goal_graph, graph_to_dict
 from robofollow.compiler.plans import plan
 from robofollow.compiler.spec import LEVELS, Spec
-from robofollow.compiler.spec_loader import load_spec
+from robofollow.compiler.spec_loader import load_partial
 from robofollow.compiler.splits import Splits, TestTask, episode_seed, generate
-from robofollow.compiler.training import check_training
+from robofollow.compiler.training import training_behaviours
 from robofollow.compiler.world import World
-from robofollow.errors import RoboFollowError
+from robofollow.errors import RoboFollowError, SpecErrors
 from robofollow.oracle.audit import FINDING_KEYS, audit, findings
 from robofollow.oracle.task_audit import listed_tests
 
@@ -62,10 +62,19 @@ def _compile_cached(specs: Path, _mtimes: tuple) -> Compiled:
 
 
 def _compile(specs: Path | list[Path]) -> Compiled:
-    spec = load_spec(specs)
-    training = check_training(spec)
+    """Every error of the specs in one report: loading, training tasks, listed tests (the
+    checks of tasks on layouts that failed to load are skipped rather than repeated)."""
+    loaded = load_partial(specs)
+    if loaded.spec is None:
+        raise SpecErrors(loaded.errors)
+    spec = loaded.spec
+    training, training_errors = training_behaviours(spec, loaded.suspect)
+    listed, test_errors = listed_tests(spec, training, loaded.suspect)
+    errors = loaded.errors + training_errors + test_errors
+    if errors:
+        raise SpecErrors(errors)
     splits = generate(spec, training)
-    splits = splits.model_copy(update={"tasks": splits.tasks + listed_tests(spec, training)})
+    splits = splits.model_copy(update={"tasks": splits.tasks + listed})
     return Compiled(spec, splits, audit(spec, training, splits), training)
 
 

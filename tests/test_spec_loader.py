@@ -5,6 +5,7 @@ from pathlib import Path
 
 import pytest
 
+from robofollow.build import compile_specs
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.errors import SpecErrors
 
@@ -170,3 +171,57 @@ def test_every_problem_is_reported_at_once(tmp_path):
 
 def test_no_spec_files(tmp_path):
     assert [e.code for e in errors_of(tmp_path, "", name="empty.txt")] == ["no-specs"]
+
+
+ONE_REPORT_A = """\
+scene a "errors in one report" {
+    object red_cube  cube half=0.02 color=violet rgb=(1, 0, 0) mass=0.2 friction=0.5
+    object blue_cube cube half=0.02 color=blue rgb=(0, 0, 1) mass=0.2 friction=0.5
+    object green_ball sphere radius=0.02 color=green rgb=(0, 1, 0) mass=0.2 friction=0.5
+    layout base {
+        red_cube  at (-0.08, -0.10)
+        blue_cube at (0.08, -0.10)
+    }
+    layout other {
+        blue_cube at (0.08, -0.10)
+        green_ball at (-0.08, -0.10)
+    }
+    task pick_red on base {
+        "Use your left arm to pick up the red cube."
+        expect pick left red_cube
+    }
+    task pick_yellow on other {
+        "Use your left arm to pick up the yellow cube."
+    }
+    task shared on other {
+        "Use your right arm to pick up the blue cube."
+    }
+}
+"""
+ONE_REPORT_B = """\
+scene b "another file" {
+    object blue_cube cube half=0.02 color=blue rgb=(0, 0, 1) mass=0.2 friction=0.5
+    layout base {
+        blue_cube at (0.08, -0.10)
+    }
+    task shared on base {
+        "Use your right arm to pick up the blue cube."
+    }
+}
+"""
+
+
+def test_every_error_of_a_run_in_one_report_without_cascades(tmp_path):
+    """A bad attribute, a grounding error and a label defined in two files, all at once; the
+    body with the bad colour is kept, so its name still resolves in `expect`, and the task on
+    its layout is not checked (its error would only repeat the colour's)."""
+    (tmp_path / "a.rf").write_text(ONE_REPORT_A)
+    (tmp_path / "b.rf").write_text(ONE_REPORT_B)
+    with pytest.raises(SpecErrors) as caught:
+        compile_specs([tmp_path / "a.rf", tmp_path / "b.rf"])
+    found = [(e.code, e.line, e.message) for e in caught.value.errors]
+    assert [(code, line) for code, line, _ in found] == [
+        ("bad-value", 2), ("duplicate-label", 6), ("no-referent", 18)]
+    assert f"task shared is also defined at {tmp_path / 'a.rf'}:20:10" in found[1][2]
+    assert caught.value.errors[1].file == str(tmp_path / "b.rf")
+    assert not any("no object named" in message for _, _, message in found)

@@ -130,6 +130,8 @@ class Repertoire:
     def __init__(self, scene: Scene, training: dict[str, Behaviour]):
         self.trained = []
         for task in scene.tasks:
+            if task.label not in training:  # a task that failed its checks
+                continue
             world, steps = World(scene, task.layout), training[task.label].steps
             self.trained.append(Trained(task.label, task.layout, steps,
                                         tuple(motion(s, world) for s in steps)))

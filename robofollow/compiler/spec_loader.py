@@ -1,13 +1,18 @@
 """Load .rf spec files into a validated Spec; report every problem at once.
 
 Each problem is a SpecError with a code ('unknown-object', 'layout-cycle', ...) and the place it
-was written; `load_spec` raises SpecErrors listing all of them.
+was written; `load_spec` raises SpecErrors listing all of them. Loading goes on past a problem
+without cascades: a body with a bad attribute is kept (with a stand-in value) so that later
+uses of its name still resolve, and `load_partial` says which layouts hold such a body or did
+not resolve, so that checks of the tasks on them (which would only repeat the problem) are
+skipped while every other task is checked in the same run.
 """
 
 from __future__ import annotations
 
 import hashlib
 import math
+from dataclasses import dataclass, field
 from functools import cache, lru_cache
 from pathlib import Path
 
@@ -78,9 +83,28 @@ def spec_files(paths: list[Path] | Path) -> list[Path]:
     return files
 
 
+@dataclass
+class Loaded:
+    """What loading gave: the spec as far as it loaded, its problems, and per scene the
+    layouts whose tasks are not worth checking (a body on them is broken, or they did not
+    resolve)."""
+
+    spec: Spec | None
+    errors: list[SpecError]
+    suspect: dict[str, set[str]] = field(default_factory=dict)
+
+
+def load_partial(paths: list[Path] | Path) -> Loaded:
+    """Parse and validate spec files, going on past problems (see the module docstring)."""
+    return _Loader().load(spec_files(paths))
+
+
 def load_spec(paths: list[Path] | Path) -> Spec:
     """Parse and validate spec files; raise SpecErrors with every problem found."""
-    return _Loader().load(spec_files(paths))
+    loaded = load_partial(paths)
+    if loaded.errors:
+        raise SpecErrors(loaded.errors)
+    return loaded.spec
 
 
 class _Loader:
@@ -88,8 +112,11 @@ class _Loader:
         self.errors: list[SpecError] = []
         self.lines: dict[str, list[str]] = {}
         self.file = ""
-        self.labels: dict[str, Token] = {}
-        self.tests: dict[str, Token] = {}  # test id -> its name token
+        self.labels: dict[str, Source] = {}  # task label -> where it is defined
+        self.tests: dict[str, Source] = {}  # test id -> where it is defined
+        self.scene_sources: dict[str, Source] = {}
+        self.broken: set[str] = set()  # bodies of the current scene with a bad attribute
+        self.suspect: dict[str, set[str]] = {}
 
     # ---------------------------------------------------------------- errors
     def error(self, code: str, message: str, where: Token | Tree | Source, length: int | None = None):
@@ -107,10 +134,10 @@ class _Loader:
         return Source(file=self.file, line=token.line, column=token.column)
 
     # ---------------------------------------------------------------- files
-    def load(self, files: list[Path]) -> Spec:
+    def load(self, files: list[Path]) -> Loaded:
         if not files:
-            raise SpecErrors([SpecError("no-specs", "no .rf spec files found", file="<specs>",
-                                        line=1, column=1)])
+            return Loaded(None, [SpecError("no-specs", "no .rf spec files found",
+                                           file="<specs>", line=1, column=1)])
         digest = hashlib.sha256()
         scenes: dict[str, Scene] = {}
         for path in files:
@@ -125,16 +152,16 @@ class _Loader:
             self.lines[self.file] = text.splitlines()
             tree = self.syntax(text)
             for node in tree.children if tree is not None else ():
-                scene = self.scene(node)
-                if scene is None:
+                name = node.children[0]
+                if name in self.scene_sources:
+                    self.error("duplicate-scene", f"scene {name!s} is also defined at "
+                                                  f"{self.scene_sources[name]}", name)
                     continue
-                if scene.id in scenes:
-                    self.error("duplicate-scene", f"scene {scene.id!r} is defined twice",
-                               node.children[0])
-                scenes[scene.id] = scene
-        if self.errors:
-            raise SpecErrors(self.errors)
-        return Spec(scenes=scenes, digest=digest.hexdigest())
+                self.scene_sources[str(name)] = self.source(name)
+                scene = self.scene(node)
+                if scene is not None:
+                    scenes[scene.id] = scene
+        return Loaded(Spec(scenes=scenes, digest=digest.hexdigest()), self.errors, self.suspect)
 
     def syntax(self, text: str) -> Tree | None:
         try:
@@ -158,7 +185,7 @@ class _Loader:
     # ---------------------------------------------------------------- scenes
     def scene(self, node: Tree) -> Scene | None:
         name, title, *items = node.children
-        errors_before = len(self.errors)
+        self.broken = set()
         points: dict[str, tuple[float, float]] = {}
         bodies: dict[str, Body] = {}
         settings = dict(_SETTINGS)
@@ -174,10 +201,9 @@ class _Loader:
             self.setting(item, settings)
         for item in by_kind.get("body", []):
             body = self.body(item)
-            if body is not None:
-                if body.id in bodies:
-                    self.error("duplicate-object", f"{body.id!r} is defined twice", item.children[1])
-                bodies[body.id] = body
+            if body.id in bodies:
+                self.error("duplicate-object", f"{body.id!r} is defined twice", item.children[1])
+            bodies[body.id] = body
         jitter = {}
         for item in by_kind.get("jitter", []):
             target, attributes = item.children[0], item.children[1:]
@@ -198,8 +224,8 @@ class _Loader:
             if rule.level in splits:
                 self.error("duplicate-split", f"two split rules for {rule.level}", item.children[0])
             splits[rule.level] = rule
-        if len(self.errors) > errors_before:
-            return None
+        self.suspect[str(name)] = {layout for layout in defined if layout not in layouts or any(
+            body in self.broken for body in layouts[layout].placed)}
         return Scene(id=str(name), title=title[1:-1], bodies=bodies, points=points, jitter=jitter,
                      layouts=layouts, tasks=tasks, splits=splits, tests=tests,
                      table_height=table)
@@ -251,40 +277,50 @@ class _Loader:
             return None
         return tuple(numbers)
 
-    def body(self, item: Tree) -> Body | None:
+    def body(self, item: Tree) -> Body:
+        """The body as written; a bad or missing attribute is an error, and the body is kept
+        with a stand-in value (marked broken when the value could change what words mean)."""
         kind_node, name, kind, *attribute_nodes = item.children
         fixture = kind_node.children[0] == "fixture"
         if kind not in _SIZES:
             self.error("unknown-kind", f"unknown kind {kind!s} (expected one of: "
                                        f"{', '.join(_SIZES)})", kind)
-            return None
+            self.broken.add(str(name))
+            kind = "cube"
         allowed = _SIZES[str(kind)] + _COMMON + (() if fixture else _PHYSICS)
         found = self.attributes(attribute_nodes, allowed)
         missing = [a for a in allowed if a not in found]
         if missing:
             self.error("missing-attribute", f"{name!s} needs {', '.join(missing)}", name)
-            return None
-        color = found["color"].children[1]
-        if color.data != "name" or color.children[0] not in lf.Color.__args__:
+        color = found["color"].children[1] if "color" in found else None
+        if color is not None and (color.data != "name"
+                                  or color.children[0] not in lf.Color.__args__):
             where = color.children[0] if color.data == "name" else found["color"].children[0]
             self.error("bad-value", f"color must be one of {', '.join(lf.Color.__args__)}", where)
-            return None
-        rgb = self.numbers(found["rgb"], 3, 0.0, 1.0)
-        if kind in ("slab", "label"):
-            half = self.numbers(found["half"], 3, 0.0005, 1.0)
-        elif kind == "cube":
-            side = self.number(found["half"], 0.0005, 1.0)
-            half = None if side is None else (side, side, side)
-        else:
-            radius = self.number(found["radius"], 0.0005, 1.0)
-            height = (self.number(found["half_height"], 0.0005, 1.0) if "half_height" in found
-                      else radius)
-            half = None if radius is None or height is None else (radius, radius, height)
+            color = None
+        rgb = self.numbers(found["rgb"], 3, 0.0, 1.0) if "rgb" in found else None
+        half = self.size(str(kind), found)
         physics = {key: self.number(found[key], 1e-6, 100.0) for key in _PHYSICS if key in found}
-        if rgb is None or half is None or None in physics.values():
+        if color is None or half is None:
+            self.broken.add(str(name))
+        return Body(id=str(name), kind=str(kind), fixture=fixture,
+                    color=str(color.children[0]) if color is not None else "red",
+                    rgb=rgb or (0.5, 0.5, 0.5), half_extents=half or (0.02, 0.02, 0.02),
+                    **{key: value for key, value in physics.items() if value is not None})
+
+    def size(self, kind: str, found: dict[str, Tree]) -> tuple[float, float, float] | None:
+        """Half extents from a kind's size attributes (None when one is missing or bad)."""
+        if any(a not in found for a in _SIZES[kind]):
             return None
-        return Body(id=str(name), kind=str(kind), fixture=fixture, color=str(color.children[0]),
-                    rgb=rgb, half_extents=half, **physics)
+        if kind in ("slab", "label"):
+            return self.numbers(found["half"], 3, 0.0005, 1.0)
+        if kind == "cube":
+            side = self.number(found["half"], 0.0005, 1.0)
+            return None if side is None else (side, side, side)
+        radius = self.number(found["radius"], 0.0005, 1.0)
+        height = (self.number(found["half_height"], 0.0005, 1.0) if "half_height" in found
+                  else radius)
+        return None if radius is None or height is None else (radius, radius, height)
 
     def jitter(self, attributes: list[Tree]) -> Jitter:
         found = self.attributes(attributes, ("x", "y"))
@@ -305,11 +341,10 @@ class _Loader:
         expect = next((t for t in rest if isinstance(t, Tree)), None)
         ok = True
         if label in self.labels:
-            previous = self.labels[str(label)]
-            self.error("duplicate-label", f"task {label!s} is already defined (line "
-                                          f"{previous.line})", label)
+            self.error("duplicate-label", f"task {label!s} is also defined at "
+                                          f"{self.labels[label]}", label)
             ok = False
-        self.labels.setdefault(str(label), label)
+        self.labels.setdefault(str(label), self.source(label))
         if layout not in layouts:
             self.error("undefined-layout", f"no layout named {layout!s} in {scene}", layout)
             ok = False
@@ -336,10 +371,10 @@ class _Loader:
         ok = True
         test_id = f"{scene}/{level}/{name}"
         if test_id in self.tests:
-            self.error("duplicate-test", f"test {name!s} of {level!s} is already defined (line "
-                                         f"{self.tests[test_id].line})", name)
+            self.error("duplicate-test", f"test {name!s} of {level!s} is also defined at "
+                                         f"{self.tests[test_id]}", name)
             ok = False
-        self.tests.setdefault(test_id, name)
+        self.tests.setdefault(test_id, self.source(name))
         if layout not in layouts:
             self.error("undefined-layout", f"no layout named {layout!s} in {scene}", layout)
             ok = False
@@ -403,11 +438,11 @@ class _Loader:
                         self.error(code, f"unknown {key[:-1]} {token!s} (known: "
                                          f"{', '.join(sorted(known))})", token)
                 values[key] = tuple(str(t) for t in tokens)
-        for key, field in (("max", "max_tasks"), ("rounds", "rounds"), ("seed", "seed")):
+        for key, name in (("max", "max_tasks"), ("rounds", "rounds"), ("seed", "seed")):
             if key in found:
                 number = self.number(found[key], 0 if key == "seed" else 1, 1e9)
                 if number is not None:
-                    values[field] = int(number)
+                    values[name] = int(number)
         return SplitRule(**values)
 
 

@@ -64,12 +64,16 @@ def task_behaviour(task: Task, scene: Scene) -> Behaviour:
     return first.model_copy(update={"steps": steps})
 
 
-def check_training(spec: Spec) -> dict[str, Behaviour]:
-    """Every training task's behaviour by label; SpecErrors lists every task that fails."""
+def training_behaviours(spec: Spec, skip: dict[str, set[str]] | None = None
+                        ) -> tuple[dict[str, Behaviour], list[SpecError]]:
+    """Every training task's behaviour by label, and a located error for each task that fails;
+    tasks on the layouts in `skip` (scene -> layouts) are left unchecked."""
     behaviours: dict[str, Behaviour] = {}
     errors: list[SpecError] = []
     for scene in spec.scenes.values():
         for task in scene.tasks:
+            if task.layout in (skip or {}).get(scene.id, ()):
+                continue
             try:
                 behaviour = task_behaviour(task, scene)
             except TaskProblem as problem:
@@ -90,6 +94,12 @@ def check_training(spec: Spec) -> dict[str, Behaviour]:
                                          + "; ".join(problems), task.source, len(task.label)))
                 continue
             behaviours[task.label] = behaviour
+    return behaviours, errors
+
+
+def check_training(spec: Spec) -> dict[str, Behaviour]:
+    """Every training task's behaviour by label; SpecErrors lists every task that fails."""
+    behaviours, errors = training_behaviours(spec)
     if errors:
         raise SpecErrors(errors)
     return behaviours
