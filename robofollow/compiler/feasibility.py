@@ -80,4 +80,7 @@ def _reach(behaviour: Behaviour, world: World) -> list[str]:
             problem = workspace.reach_problem(point.arm, point.position, world.table, slack)
             if problem:
                 problems.append(f"{point.name}: {problem}")
+    if len(problems) > 1:
+        return [f"{problems[0]} (and {len(problems) - 1} more plan point"
+                f"{'s' if len(problems) > 2 else ''})"]
     return problems
