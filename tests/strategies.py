@@ -97,3 +97,114 @@ def small_specs(draw) -> tuple[str, list[int]]:
               f"    split L3 layouts=({layouts}) wordings=(referents) max=12 rounds=2 seed=7",
               "}"]
     return "\n".join(lines) + "\n", [len(tasks)]
+
+
+# richer random specs: what the shipped specs use -- bowls, pushes, stacks, sequences,
+# conditionals, routes over slabs onto labels, identical-looking bodies and swaps
+_GRID = [(x, y) for y in (-0.05, -0.17) for x in (-0.16, -0.05, 0.06, 0.17)]
+
+
+def _arm(x: float) -> str:
+    return "left" if x < 0 else "right"
+
+
+@st.composite
+def rich_specs(draw) -> dict:
+    """{"text": spec text, "twins": (a, b) | None, "look_alike": layout | None} for one random
+    scene: 2-4 distinct objects on a grid, maybe a bowl, maybe a second (identical-looking)
+    copy of the first object, maybe a stack, and tasks of every action kind."""
+    count = draw(st.integers(2, 4))
+    objects = draw(st.lists(st.tuples(st.sampled_from(sorted(_SIZES)),
+                                      st.sampled_from(["red", "green", "blue", "yellow"])),
+                            min_size=count, max_size=count, unique=True))
+    slots = list(draw(st.permutations(range(len(_GRID)))))
+    at = {f"o{i}": _GRID[slots[i]] for i in range(count)}
+    lines = ['scene demo "Random" {', "    jitter * x=[-0.01, 0.01] y=[-0.01, 0.01]"]
+    for index, (kind, colour) in enumerate(objects):
+        lines.append(f"    object o{index} {kind} {_SIZES[kind]} color={colour} "
+                     f"rgb={_RGB[colour]} mass=0.2 friction=0.5")
+    name = {f"o{i}": f"the {objects[i][1]} {objects[i][0]}" for i in range(count)}
+    twins = None
+    if draw(st.booleans()):  # an identical-looking copy of o0, never named in a task
+        kind, colour = objects[0]
+        lines.append(f"    object t0 {kind} {_SIZES[kind]} color={colour} rgb={_RGB[colour]} "
+                     "mass=0.2 friction=0.5")
+        at["t0"] = _GRID[slots[count]]
+        twins = ("o0", "t0")
+    bowl = draw(st.booleans())
+    if bowl:
+        lines.append("    fixture bowl bowl radius=0.045 half_height=0.02 color=green "
+                     "rgb=(0.1, 0.7, 0.2)")
+        at["bowl"] = _GRID[slots[-1]]
+    stacked = None
+    if count >= 3 and objects[2][0] == "cube" and objects[1][0] != "sphere" and \
+            draw(st.booleans()):
+        stacked = "o2"  # o2 rests on o1 in the base layout
+    lines.append("    layout base {")
+    for body, (x, y) in at.items():
+        if body != stacked:
+            lines.append(f"        {body} at ({x}, {y})")
+    if stacked:
+        lines.append(f"        {stacked} on o1")
+    lines.append("    }")
+    layouts = []
+    if twins:
+        lines.append("    layout look_alike from base { swap o0 t0 }")
+    a, b = draw(st.tuples(st.integers(0, count - 1), st.integers(0, count - 1))
+                .filter(lambda p: p[0] != p[1]))
+    if stacked not in (f"o{a}", f"o{b}"):
+        lines.append(f"    layout v0 from base {{ swap o{a} o{b} }}")
+        layouts.append("v0")
+    # what tasks may move: not o1 under a stack, not o0 when its twin makes "the red cube"
+    # ambiguous
+    free = [f"o{i}" for i in range(count)
+            if not (stacked and i == 1) and not (twins and i == 0)]
+    if not free:
+        free = [f"o{count - 1}"]
+    kinds = draw(st.lists(st.sampled_from(["pick", "place", "push", "bowl", "sequence",
+                                           "conditional"]), min_size=1, max_size=5))
+    texts = []
+    for kind in kinds:
+        source, other = draw(st.permutations(free))[:2] if len(free) >= 2 else (free[0], None)
+        sx = at[source][0]
+        if kind == "pick" or other is None:
+            texts.append(f"Use your {_arm(sx)} arm to pick up {name[source]}")
+        elif kind == "place":
+            where = draw(st.sampled_from(sorted(_PLACEMENTS)))
+            texts.append(f"Use your {_arm(at[other][0])} arm to pick up {name[source]} and "
+                         f"place it {_PLACEMENTS[where]} {name[other]}")
+        elif kind == "push":
+            texts.append(f"Use your {_arm(sx)} arm to push {name[source]} towards "
+                         f"{name[other]}")
+        elif kind == "bowl" and bowl:
+            texts.append(f"Use your {_arm(at['bowl'][0])} arm to pick up {name[source]} and "
+                         "place it in the bowl")
+        elif kind == "sequence" and _arm(sx) != _arm(at[other][0]):
+            texts.append(f"First use your {_arm(sx)} arm to pick up {name[source]}, then use "
+                         f"your {_arm(at[other][0])} arm to pick up {name[other]}")
+        elif kind == "conditional" and at[source][1] == at[other][1]:  # a row: left is clear
+            texts.append(f"If {name[source]} is to the left of {name[other]}, use your "
+                         f"{_arm(sx)} arm to pick up {name[source]}; otherwise use your "
+                         f"{_arm(at[other][0])} arm to pick up {name[other]}")
+        else:
+            texts.append(f"Use your {_arm(sx)} arm to pick up {name[source]}")
+    for index, text in enumerate(dict.fromkeys(texts)):
+        lines += [f"    task t{index}_{kinds[0]} on base {{", f'        "{text}."', "    }"]
+    if twins:
+        layouts.append("look_alike")
+    if layouts:
+        lines += [f"    split L1 layouts=({', '.join(layouts)}) rounds=2 seed=7",
+                  f"    split L3 layouts=({', '.join(layouts)}) wordings=(referents) max=12 "
+                  "rounds=2 seed=7"]
+    lines += ["    split L2 wordings=(referents, conditions, branches) max=12 rounds=2 seed=7",
+              "}"]
+    return {"text": "\n".join(lines) + "\n", "twins": twins,
+            "look_alike": "look_alike" if twins else None}
+
+
+# a route step's geometry: a source, a destination at least 20 cm away, and where the body
+# it names stands, as (along the path, across it) in metres
+route_geometry = st.tuples(
+    st.floats(-0.2, 0.2), st.floats(-0.25, 0.0),  # source x, y
+    st.floats(0.20, 0.35), st.floats(0, 2 * 3.141592653589793),  # path length, heading
+)

@@ -7,6 +7,10 @@ from pathlib import Path
 import pytest
 
 from robofollow import cli
+from robofollow.build import compile_specs
+from robofollow.oracle.audit import findings
+from robofollow.oracle.task_audit import ListedTask, audit_task_list, task_list
+from robofollow.resources import builtin_specs
 from tests.test_spec_loader import edit
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
@@ -93,3 +97,12 @@ def test_injected_leaks_are_caught():
     assert (copied.id, "form") in found
     assert (named.id, "instruction") in found
     assert leakage(spec, splits) == []
+
+
+@pytest.mark.parametrize("spec_file", sorted(builtin_specs().glob("*.rf")), ids=lambda p: p.stem)
+def test_every_shipped_scene_compiles_alone_without_findings_and_audits_back(spec_file):
+    compiled = compile_specs(spec_file)
+    assert findings(compiled.report) == 0
+    assert compiled.report["split_rules"]["warnings"] == []
+    exported = [ListedTask(**t) for t in task_list(compiled.splits)]
+    assert audit_task_list(compiled.spec, compiled.training, exported)["findings"] == []

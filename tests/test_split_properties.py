@@ -1,14 +1,24 @@
-"""Split validity on generated specs: the compiled splits always pass their own audit."""
+"""Split validity on generated specs: the compiled splits always pass their own audit, trained
+motions stay in the repertoire, look-alike layouts are never changed layouts, and degenerate
+routes are always found."""
 
 import math
 import tempfile
 from pathlib import Path
 
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import strategies as st
 
 from robofollow.build import compile_specs
+from robofollow.compiler.behaviour import Step
+from robofollow.compiler.motions import Repertoire
+from robofollow.compiler.observation import same_observation
+from robofollow.compiler.routes import ROUTE_BAND, degenerate_routes
+from robofollow.compiler.spec import Body, Layout, Placed, Scene
+from robofollow.compiler.world import World
+from robofollow.errors import SpecErrors
 from robofollow.oracle.audit import FINDING_KEYS, findings, leakage
-from tests.strategies import small_specs
+from tests.strategies import rich_specs, route_geometry, small_specs
 
 HEAVY = settings(max_examples=25, deadline=None,
                  suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
@@ -56,3 +66,79 @@ def test_injected_leaks_are_always_caught(generated):
     tampered = splits.model_copy(update={"tasks": splits.tasks + (copied, named)})
     flagged = {f["task"] for f in leakage(spec, tampered)}
     assert {copied.id, named.id} <= flagged
+
+
+def compile_or_skip(text: str):
+    """The compiled spec; a random task the expert cannot perform (an arm stretched too far, no
+    free spot) is a spec error, not a split problem, and the example is discarded."""
+    try:
+        return compile_text(text)
+    except SpecErrors as error:
+        assume(not all(e.code == "infeasible" for e in error.errors))
+        raise
+
+
+@HEAVY
+@given(generated=rich_specs())
+def test_rich_specs_compile_to_splits_without_findings(generated):
+    compiled = compile_or_skip(generated["text"])
+    report = compiled.report
+    assert findings(report) == 0, {key: report[key] for key in FINDING_KEYS if report[key]}
+    scene = compiled.spec.scenes["demo"]
+    repertoire = Repertoire(scene, compiled.training)
+    for task in scene.tasks:  # a training motion is always in the repertoire
+        assert repertoire.covers(compiled.training[task.label], World(scene, task.layout),
+                                 compose=False)
+
+
+@HEAVY
+@given(generated=rich_specs().filter(lambda g: g["twins"] is not None))
+def test_a_swap_of_identical_looking_bodies_is_never_a_changed_layout(generated):
+    compiled = compile_or_skip(generated["text"])
+    scene = compiled.spec.scenes["demo"]
+    assert same_observation(scene, "base", "look_alike")
+    assert not [t for t in compiled.splits.tasks if t.layout == "look_alike"]
+    assert any("layout look_alike yields no task" in w and "looks the same as the training "
+               "layout base" in w for w in compiled.report["split_rules"]["warnings"])
+    # the training motions, performed with the twins' names traded, are still trained motions
+    repertoire = Repertoire(scene, compiled.training)
+    trade = {"o0": "t0", "t0": "o0"}
+    for task in scene.tasks:
+        behaviour = compiled.training[task.label]
+        steps = tuple(s.model_copy(update={"source": trade.get(s.source, s.source),
+                                           "target": trade.get(s.target, s.target)})
+                      for s in behaviour.steps)
+        assert repertoire.covers(behaviour.model_copy(update={"steps": steps}),
+                                 World(scene, "look_alike"), compose=False)
+
+
+def _route_world(source, target, body) -> World:
+    """A label at `target`, a slab at `source` and one at `body` (x, y)."""
+    slab = dict(kind="slab", fixture=False, color="red", rgb=(1, 0, 0),
+                half_extents=(0.018, 0.028, 0.013))
+    bodies = {"s": Body(id="s", **slab), "w": Body(id="w", **{**slab, "color": "blue"}),
+              "label": Body(id="label", kind="label", fixture=True, color="green",
+                            rgb=(0, 1, 0), half_extents=(0.035, 0.035, 0.001))}
+    placed = {name: Placed(x=x, y=y, z=0.74 + bodies[name].half_extents[2])
+              for name, (x, y) in (("s", source), ("label", target), ("w", body))}
+    scene = Scene(id="r", title="r", bodies=bodies, points={}, jitter={},
+                  layouts={"l": Layout(name="l", placed=placed)}, tasks=(), splits={})
+    return World(scene, "l")
+
+
+@settings(max_examples=200, deadline=None)
+@given(geometry=route_geometry, behind=st.floats(0.0, 0.15), side=st.floats(-0.3, 0.3),
+       mode=st.sampled_from(["via", "avoid"]))
+def test_a_degenerate_route_is_always_found(geometry, behind, side, mode):
+    x, y, length, heading = geometry
+    ux, uy = math.cos(heading), math.sin(heading)
+    target = (x + length * ux, y + length * uy)
+    step = Step(action="place", arm="left", source="s", relation="on", target="label",
+                waypoints=((mode, "w"),))
+    # behind the source (its footprint reaching back from the source's): never on the way
+    back = (x - (0.04 + behind) * ux, y - (0.04 + behind) * uy)
+    assert degenerate_routes(step, _route_world((x, y), target, back))
+    # halfway, within the band: on the way; beyond the band: off it
+    middle = (x + length / 2 * ux - side * uy, y + length / 2 * uy + side * ux)
+    found = degenerate_routes(step, _route_world((x, y), target, middle))
+    assert bool(found) == (abs(side) > ROUTE_BAND), found
