@@ -111,8 +111,9 @@ def _arm(x: float) -> str:
 @st.composite
 def rich_specs(draw) -> dict:
     """{"text": spec text, "twins": (a, b) | None, "look_alike": layout | None} for one random
-    scene: 2-4 distinct objects on a grid, maybe a bowl, maybe a second (identical-looking)
-    copy of the first object, maybe a stack, and tasks of every action kind."""
+    scene: 2-4 distinct objects on a grid, maybe a bowl and a label, maybe a second
+    (identical-looking) copy of the first object, maybe a stack, and tasks of every action
+    kind, routes included."""
     count = draw(st.integers(2, 4))
     objects = draw(st.lists(st.tuples(st.sampled_from(sorted(_SIZES)),
                                       st.sampled_from(["red", "green", "blue", "yellow"])),
@@ -136,6 +137,11 @@ def rich_specs(draw) -> dict:
         lines.append("    fixture bowl bowl radius=0.045 half_height=0.02 color=green "
                      "rgb=(0.1, 0.7, 0.2)")
         at["bowl"] = _GRID[slots[-1]]
+    label = draw(st.booleans())
+    if label:
+        lines.append("    fixture label label half=(0.035, 0.035, 0.001) color=green "
+                     "rgb=(0, 0.8, 0)")
+        at["label"] = _GRID[slots[-2]]
     stacked = None
     if count >= 3 and objects[2][0] == "cube" and objects[1][0] != "sphere" and \
             draw(st.booleans()):
@@ -162,7 +168,7 @@ def rich_specs(draw) -> dict:
     if not free:
         free = [f"o{count - 1}"]
     kinds = draw(st.lists(st.sampled_from(["pick", "place", "push", "bowl", "sequence",
-                                           "conditional"]), min_size=1, max_size=5))
+                                           "conditional", "route"]), min_size=1, max_size=5))
     texts = []
     for kind in kinds:
         source, other = draw(st.permutations(free))[:2] if len(free) >= 2 else (free[0], None)
@@ -179,6 +185,10 @@ def rich_specs(draw) -> dict:
         elif kind == "bowl" and bowl:
             texts.append(f"Use your {_arm(at['bowl'][0])} arm to pick up {name[source]} and "
                          "place it in the bowl")
+        elif kind == "route" and label:
+            mode = draw(st.sampled_from(["pass over", "avoid passing over"]))
+            texts.append(f"Use your {_arm(at['label'][0])} arm to pick up {name[source]}, "
+                         f"{mode} {name[other]}, and place it on the green label")
         elif kind == "sequence" and _arm(sx) != _arm(at[other][0]):
             texts.append(f"First use your {_arm(sx)} arm to pick up {name[source]}, then use "
                          f"your {_arm(at[other][0])} arm to pick up {name[other]}")
@@ -196,7 +206,8 @@ def rich_specs(draw) -> dict:
         lines += [f"    split L1 layouts=({', '.join(layouts)}) rounds=2 seed=7",
                   f"    split L3 layouts=({', '.join(layouts)}) wordings=(referents) max=12 "
                   "rounds=2 seed=7"]
-    lines += ["    split L2 wordings=(referents, conditions, branches) max=12 rounds=2 seed=7",
+    lines += ["    split L2 wordings=(referents, routes, conditions, branches) max=12 rounds=2 "
+              "seed=7",
               "}"]
     return {"text": "\n".join(lines) + "\n", "twins": twins,
             "look_alike": "look_alike" if twins else None}

@@ -69,3 +69,37 @@ def test_task_problems_are_reported_at_the_paraphrase(tmp_path, paraphrases, cod
 def test_ambiguity_lists_the_candidates(tmp_path):
     errors = check(tmp_path, edit(TASK, '"Pick up the cube with your left arm."'))
     assert "red_cube" in errors[0].message and "blue_cube" in errors[0].message
+
+
+def test_a_training_route_off_the_way_is_an_error(tmp_path):
+    """scene3_3 puts the blue slab in the red slab's own column: passing over it turns back."""
+    text = (SPECS / "scene3.rf").read_text()
+    end = text.rindex("}")
+    (tmp_path / "scene3.rf").write_text(text[:end] + '''
+    task backwards on scene3_3 {
+        "Use your right arm to pick up the red slab, pass over the blue slab, and place it on the blue square label with the short side facing front."
+    }
+''' + text[end:])
+    with pytest.raises(SpecErrors) as caught:
+        check_training(load_spec(tmp_path))
+    [error] = caught.value.errors
+    assert (error.code, error.line) == ("degenerate-route", text[:end].count("\n") + 2)
+    assert "'pass over blue_slab': blue_slab is not between red_slab and blue_label" in \
+        error.message
+
+
+def test_a_training_task_out_of_reach_is_an_error(tmp_path):
+    text = (SPECS / "scene2.rf").read_text()
+    end = text.rindex("}")
+    (tmp_path / "scene2.rf").write_text(text[:end] + '''
+    layout far from default { move small_red_cube to (0.40, 0.10) }
+    task pick_far_cube on far {
+        "Use your left arm to pick up the red cube."
+    }
+''' + text[end:])
+    with pytest.raises(SpecErrors) as caught:
+        check_training(load_spec(tmp_path))
+    [error] = caught.value.errors
+    assert error.code == "infeasible" and error.message.startswith(
+        "the expert cannot do this: pre_grasp: the left arm would stretch 83.2 cm to (40.0, "
+        "10.0, 84.0) cm with the jitter, beyond its 58.6 cm reach (and 3 more plan points)")

@@ -1,5 +1,5 @@
-"""Check training tasks against their layouts: one behaviour per task, as `expect` says,
-that the expert can perform (feasibility.py).
+"""Check training tasks against their layouts: one behaviour per task, as `expect` says, with
+its route on the way (routes.py), that the expert can perform (feasibility.py).
 
 Every paraphrase of a task must ground to the same behaviour. Paraphrases may leave the arm
 unnamed ("Move the blue slab ..."); the task's arm is the one the others name, and naming two
@@ -11,6 +11,7 @@ from __future__ import annotations
 from robofollow.compiler.behaviour import Behaviour, describe
 from robofollow.compiler.feasibility import infeasible
 from robofollow.compiler.grounding import GroundingError, ground
+from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import Expected, Scene, Spec, Task
 from robofollow.compiler.spec_loader import spec_error
 from robofollow.compiler.world import World
@@ -88,7 +89,13 @@ def training_behaviours(spec: Spec, skip: dict[str, set[str]] | None = None
                         "expect-mismatch", f"the instructions mean {describe(behaviour)}, but "
                         f"expect says {describe(expected)}", task.source, len(task.label)))
                     continue
-            problems = infeasible(behaviour, World(scene, task.layout))
+            world = World(scene, task.layout)
+            routes = [p for step in behaviour.steps for p in degenerate_routes(step, world)]
+            if routes:
+                errors.append(spec_error("degenerate-route", "; ".join(routes), task.source,
+                                         len(task.label)))
+                continue
+            problems = infeasible(behaviour, world)
             if problems:
                 errors.append(spec_error("infeasible", "the expert cannot do this: "
                                          + "; ".join(problems), task.source, len(task.label)))
