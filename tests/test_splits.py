@@ -120,3 +120,42 @@ def test_routes_compare_by_the_bodies_passed_over(compiled):
     assert passes_over(around_red, world) == ("green_slab",)
     via_yellow = training["r_pick2_via4_to6_short_front"].steps[0]
     assert passes_over(via_yellow, world) == ("yellow_slab",)
+
+
+def _scene1_with(tmp_path: Path, old: str, new: str) -> Path:
+    """The shipped specs (their training words make the L2/L3 wordings) with scene1 edited."""
+    for spec in SPECS.glob("*.rf"):
+        (tmp_path / spec.name).write_text(spec.read_text())
+    text = (SPECS / "scene1.rf").read_text()
+    assert old in text
+    (tmp_path / "scene1.rf").write_text(text.replace(old, new, 1))
+    return tmp_path
+
+
+L3_RULE = "split L3 layouts=(scene1_1, scene1_2, scene1_3)"
+
+
+def test_a_rule_layout_that_yields_nothing_is_a_warning_with_the_reason(tmp_path):
+    from robofollow.build import compile_specs
+
+    folder = _scene1_with(tmp_path, L3_RULE, "layout scene1_4 from default { swap red_sphere "
+                          "red_cylinder }\n    " + L3_RULE.replace(")", ", scene1_4)"))
+    warnings = compile_specs(folder).report["split_rules"]["warnings"]
+    assert warnings == ["scene1 split L3: layout scene1_4 yields no task (L3 rewords the kept L1 "
+                        "tasks of its layouts, and the L1 rule does not name it)"]
+
+
+def test_a_capped_level_gives_a_new_layout_its_share_and_displaces_no_more(tmp_path):
+    from robofollow.build import compile_specs
+
+    before = compile_specs(SPECS)
+    l1_rule = "split L1 layouts=(scene1_1, scene1_2, scene1_3)"
+    folder = _scene1_with(tmp_path, l1_rule, "layout scene1_4 from default { swap red_sphere "
+                          "red_cylinder }\n    " + l1_rule.replace(")", ", scene1_4)"))
+    text = (folder / "scene1.rf").read_text().replace(L3_RULE, L3_RULE.replace(")", ", scene1_4)"))
+    (folder / "scene1.rf").write_text(text)
+    after = compile_specs(folder)
+    old = {t.id for t in before.splits.of("scene1", "L3")}
+    new = {t.id for t in after.splits.of("scene1", "L3")}
+    gained = [t for t in new - old if "@scene1_4/" in t]
+    assert gained and len(new - old) == len(gained) and len(old - new) == len(gained)
