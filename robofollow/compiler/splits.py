@@ -19,8 +19,8 @@ import hashlib
 
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.grounding import Grounder, GroundingError, instability
 from robofollow.compiler.feasibility import infeasible
+from robofollow.compiler.grounding import Grounder, GroundingError, instability
 from robofollow.compiler.model import Model
 from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
 from robofollow.compiler.observation import look_alike
@@ -177,7 +177,6 @@ class _Generator:
                     continue
                 self.consider("L1", layout, task.paraphrases[0], task.forms[0], task.label,
                               "training")
-
 
     def reworded(self, level: Level, layout: str, form: lf.Instruction, origin: str,
                  wordings: tuple[str, ...]) -> None:
