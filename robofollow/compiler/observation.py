@@ -1,7 +1,7 @@
 """Layouts as a policy sees them: bodies by appearance and position, never by name.
 
 Two layouts are the same observation when a permutation of identical-looking bodies (same
-kind, size and colour) maps one onto the other, every body within OBSERVATION_TOLERANCE of
+kind, size and colour; a perfect bipartite matching) maps one onto the other, every body within OBSERVATION_TOLERANCE of
 its image and resting on (or in) a body that looks the same. Swapping two identical cubes
 changes nothing a camera sees.
 """
@@ -10,50 +10,50 @@ from __future__ import annotations
 
 import math
 
+import networkx as nx
+
 from robofollow.compiler.spec import Body, Scene
 from robofollow.compiler.world import World
 
 OBSERVATION_TOLERANCE = 0.005  # m: bodies this close look to be in the same place
-APPEARANCE_TOLERANCE = 0.002  # m (sizes) and 0.02 (rgb): bodies this alike look the same
+SIZE_TOLERANCE = 0.002  # m: half extents this close look the same
+COLOUR_TOLERANCE = 0.02  # rgb components (0-1) this close look the same
 
 
-def appearance(body: Body) -> tuple:
-    """What a camera sees of a body, rounded to the tolerances: kind, size, colour."""
-    return (body.kind,
-            tuple(round(h / APPEARANCE_TOLERANCE) for h in body.half_extents),
-            tuple(round(c / 0.02) for c in body.rgb))
+def looks_alike(a: Body | None, b: Body | None) -> bool:
+    """Whether two bodies (or two absences of one) look the same: kind, size and colour."""
+    if a is None or b is None:
+        return a is b
+    return (a.kind == b.kind
+            and all(abs(x - y) <= SIZE_TOLERANCE
+                    for x, y in zip(a.half_extents, b.half_extents, strict=True))
+            and all(abs(x - y) <= COLOUR_TOLERANCE for x, y in zip(a.rgb, b.rgb, strict=True)))
 
 
-def _seen(scene: Scene, layout: str) -> list[tuple[tuple, tuple[float, float, float], tuple]]:
-    """(appearance, position, what it rests on as (relation, appearance)) per body."""
+def _seen(scene: Scene, layout: str) -> list[tuple]:
+    """(body, position, relation to what it rests on, that support's body) per body."""
     world, placed = World(scene, layout), scene.layouts[layout].placed
-    seen = []
-    for name, body in world.bodies.items():
-        pose, where = world.poses[name], placed[name]
-        under = None if where.support is None else appearance(scene.bodies[where.support])
-        seen.append((appearance(body), (pose.x, pose.y, pose.z), (where.relation, under)))
-    return seen
+    return [(body, (world.poses[name].x, world.poses[name].y, world.poses[name].z),
+             placed[name].relation,
+             None if placed[name].support is None else scene.bodies[placed[name].support])
+            for name, body in world.bodies.items()]
 
 
 def same_observation(scene: Scene, a: str, b: str) -> bool:
     """Whether layouts `a` and `b` of a scene look the same (see the module docstring)."""
     first, second = _seen(scene, a), _seen(scene, b)
-    if sorted(x[0] for x in first) != sorted(x[0] for x in second):
+    if len(first) != len(second):
         return False
-    return _match(first, second)
-
-
-def _match(left: list, right: list) -> bool:
-    """A bijection pairing each body with a look-alike at the same place (backtracking)."""
-    if not left:
-        return True
-    look, position, rest = left[0]
-    for index, (other_look, other_position, other_rest) in enumerate(right):
-        if (other_look == look and other_rest == rest
-                and math.dist(position, other_position) <= OBSERVATION_TOLERANCE
-                and _match(left[1:], right[:index] + right[index + 1:])):
-            return True
-    return False
+    graph = nx.Graph()
+    graph.add_nodes_from(range(len(first)))
+    graph.add_edges_from(
+        (i, len(first) + j) for i, (body, position, relation, support) in enumerate(first)
+        for j, (other, other_position, other_relation, other_support) in enumerate(second)
+        if looks_alike(body, other) and relation == other_relation
+        and looks_alike(support, other_support)
+        and math.dist(position, other_position) <= OBSERVATION_TOLERANCE)
+    matching = nx.bipartite.maximum_matching(graph, top_nodes=range(len(first)))
+    return len(matching) == 2 * len(first)  # the matching maps both ways
 
 
 def look_alike(scene: Scene, layout: str, layouts) -> str | None:
