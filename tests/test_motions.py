@@ -50,3 +50,10 @@ def test_differences_name_every_part_that_changed():
     other = motion(Step(action="pick", arm="right", source="red_sphere"), world)
     assert differences(base, base) == []
     assert differences(other, base) == ["arm", "object", "pick location"]
+
+
+def test_without_training_tasks_nothing_is_in_the_repertoire():
+    scene = benchmark().spec.scenes["scene1"]
+    assert Repertoire(scene, {}).missing(pick("left", "yellow_block_1"), World(scene, "default"),
+                                         compose=True) == \
+        "pick left yellow_block_1: the scene has no checked training task"

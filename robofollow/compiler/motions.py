@@ -155,6 +155,8 @@ class Repertoire:
                 "performs them together in this order (composition is what L2 and L3 test)")
 
     def _new_step(self, behaviour: Behaviour, index: int, m: Motion) -> str:
+        if not self.steps:
+            return f"{describe_steps(behaviour.steps)}: the scene has no checked training task"
         def distance(entry):
             trained = entry[0].motions[entry[1]]
             parts = differences(m, trained)
