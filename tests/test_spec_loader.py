@@ -90,6 +90,10 @@ def edit(old, new):
 # (spec text, error code, line, column)
 MALFORMED = [
     (edit("blue_cube at p1", "green_cube at p1"), "unknown-object", 9, 9),
+    (edit("color=blue rgb=(0, 0, 1)", "color=blue rgb=(1, 0, 0)"), "colour-mismatch", 4, 12),
+    (edit("red_cube at (-0.1, 0.0)", "red_cube at (0.3, 0.3)"), "off-table", 7, 12),
+    (edit("red_cube at (-0.1, 0.0)", "red_cube at (0.08, 0.01)"), "overlap", 7, 12),
+    (edit("red_cube at (-0.1, 0.0)", "red_cube at (0.05, 0.0)"), "overlap", 7, 12),
     (edit("blue_cube at p1", "blue_cube at p9"), "unknown-point", 9, 22),
     (edit("swap red_cube blue_cube", "swap red_cube red_cube"), "swap-self", 12, 46),
     (edit("swap red_cube blue_cube", "swap red_cube bowl_two"), "unknown-object", 12, 46),

@@ -20,6 +20,7 @@ from lark import Lark, Token, Tree, UnexpectedCharacters, UnexpectedEOF, Unexpec
 
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Step
+from robofollow.compiler.observation import looks_alike
 from robofollow.compiler.parser import parse
 from robofollow.compiler.spec import (
     Body,
@@ -204,6 +205,7 @@ class _Loader:
             if body.id in bodies:
                 self.error("duplicate-object", f"{body.id!r} is defined twice", item.children[1])
             bodies[body.id] = body
+        self.check_colours(bodies, by_kind.get("body", []))
         jitter = {}
         for item in by_kind.get("jitter", []):
             target, attributes = item.children[0], item.children[1:]
@@ -229,6 +231,19 @@ class _Loader:
         return Scene(id=str(name), title=title[1:-1], bodies=bodies, points=points, jitter=jitter,
                      layouts=layouts, tasks=tasks, splits=splits, tests=tests,
                      table_height=table)
+
+    def check_colours(self, bodies: dict[str, Body], items: list[Tree]) -> None:
+        """Bodies that look the same (kind, size, rgb) must not be told apart by colour words
+        a camera cannot see."""
+        tokens = {str(item.children[1]): item.children[1] for item in items}
+        seen: list[Body] = []
+        for body in bodies.values():
+            twin = next((b for b in seen if looks_alike(b, body) and b.color != body.color), None)
+            if twin is not None and body.id not in self.broken:
+                self.error("colour-mismatch", f"{body.id} looks the same as {twin.id} (kind, "
+                           f"size, rgb) but is called {body.color}, not {twin.color}",
+                           tokens[body.id])
+            seen.append(body)
 
     def setting(self, item: Tree, settings: dict[str, float]) -> None:
         name, value = item.children
