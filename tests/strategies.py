@@ -18,13 +18,28 @@ simple_constraints = st.one_of(
     st.builds(lf.SizeIs, size=_values(lf.Size)),
     st.builds(lf.ExtremeIs, extreme=_values(lf.Extreme), negated=st.booleans()),
     st.builds(lf.NotKind, noun=nouns),
+    st.builds(lf.OrdinalIs, rank=st.integers(1, 5), side=_values(lf.Facing)),
+    st.just(lf.MiddleIs()),
 )
-simple_refs = st.builds(lf.Ref, noun=nouns,
-                        constraints=st.lists(simple_constraints, max_size=3).map(tuple))
-relations = st.builds(lf.Related, relation=_values(lf.Relation), landmark=simple_refs,
-                      negated=st.booleans())
+
+
+def _one_position(constraints: list) -> bool:
+    return sum(isinstance(c, (lf.OrdinalIs, lf.MiddleIs)) for c in constraints) <= 1
+
+
+simple_refs = st.builds(lf.Ref, noun=nouns, constraints=st.lists(
+    simple_constraints, max_size=3).filter(_one_position).map(tuple))
+relations = st.one_of(
+    st.builds(lf.Related, relation=_values(lf.Relation), landmark=simple_refs,
+              negated=st.booleans()),
+    st.builds(lf.Between, landmarks=st.tuples(simple_refs, simple_refs).filter(
+        lambda pair: pair[0] != pair[1]), negated=st.booleans()),
+    st.builds(lf.NearestIs, nearness=_values(lf.Nearness), landmark=simple_refs,
+              negated=st.booleans()),
+)
 constraints = st.one_of(simple_constraints, relations)
-refs = st.builds(lf.Ref, noun=nouns, constraints=st.lists(constraints, max_size=3).map(tuple))
+refs = st.builds(lf.Ref, noun=nouns, constraints=st.lists(
+    constraints, max_size=3).filter(_one_position).map(tuple))
 
 picks = st.builds(lf.Pick, arm=arms, object=refs)
 pushes = st.builds(lf.Push, arm=arms, object=refs, toward=refs)
@@ -32,7 +47,8 @@ places = st.builds(
     lf.Place, arm=arms, object=refs,
     destination=st.builds(lf.Placement, relation=_values(lf.PlaceRelation), landmark=refs),
     route=st.lists(st.builds(lf.Waypoint, mode=st.sampled_from(["via", "avoid"]),
-                             landmark=simple_refs), max_size=2).map(tuple),
+                             landmark=simple_refs), max_size=2,
+                   unique_by=lambda w: w.landmark).map(tuple),
     orientation=st.none() | st.builds(lf.Orientation, side=_values(lf.Side),
                                       facing=_values(lf.Facing)))
 commands = st.one_of(picks, pushes, places)

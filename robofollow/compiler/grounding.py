@@ -12,7 +12,15 @@ from dataclasses import dataclass
 
 from robofollow.compiler import lf, notation
 from robofollow.compiler.behaviour import Behaviour, Step
-from robofollow.compiler.world import EXTREME_AXES, EXTREME_MARGIN, SIZE_MARGIN, World
+from robofollow.compiler.world import (
+    EXTREME_AXES,
+    EXTREME_MARGIN,
+    NEAREST_MARGIN,
+    ORDINAL_AXES,
+    ORDINAL_MARGIN,
+    SIZE_MARGIN,
+    World,
+)
 from robofollow.errors import RoboFollowError
 
 TABLE = "table"  # the table as a landmark ('not touching the table')
@@ -72,7 +80,7 @@ class Grounder:
         candidates = self.domain(ref.noun)
         comparatives = []
         for constraint in ref.constraints:
-            if isinstance(constraint, (lf.SizeIs, lf.ExtremeIs)):
+            if isinstance(constraint, lf.COMPARATIVES):
                 comparatives.append(constraint)
             else:
                 candidates = [b for b in candidates if self.satisfies(b, constraint)]
@@ -99,6 +107,10 @@ class Grounder:
             return (self.world.bodies[body].color == constraint.color) != constraint.negated
         if isinstance(constraint, lf.NotKind):
             return not kind_matches(self.world, body, constraint.noun)
+        if isinstance(constraint, lf.Between):
+            a, b = (self.resolve(landmark) for landmark in constraint.landmarks)
+            holds = body not in (a, b) and TABLE not in (a, b) and self.world.between(body, a, b)
+            return holds != constraint.negated
         if isinstance(constraint, lf.Related):
             landmark = self.resolve(constraint.landmark)
             if landmark == body:
@@ -117,7 +129,13 @@ class Grounder:
         return self.world.bodies[body].kind
 
     def compare(self, candidates: list[str], constraint, ref: lf.Ref | None) -> list[str]:
-        """Apply 'larger', 'leftmost', 'non-leftmost' ... to a candidate list."""
+        """Apply 'larger', 'leftmost', 'closest to X', 'second from the left', 'middle' (and
+        negations) to a candidate list: the winner must lead by the named margin."""
+        if isinstance(constraint, lf.NearestIs):
+            landmark = self.resolve(constraint.landmark)
+            candidates = [b for b in candidates if b != landmark]
+        if isinstance(constraint, (lf.OrdinalIs, lf.MiddleIs)):
+            return self.position(candidates, constraint, ref)
         if len(candidates) <= 1:
             return [] if getattr(constraint, "negated", False) else candidates
         if isinstance(constraint, lf.SizeIs):
@@ -128,16 +146,49 @@ class Grounder:
             if abs(best - second) < SIZE_MARGIN * max(abs(best), abs(second)):
                 self._tie(ranked[:2], constraint, ref)
             return ranked[:1]
-        axis, sign = EXTREME_AXES[constraint.extreme]
-        values = {b: sign * (self.world.poses[b].x, self.world.poses[b].y)[axis]
-                  for b in candidates}
+        if isinstance(constraint, lf.NearestIs):
+            sign = -1.0 if constraint.nearness == "nearest" else 1.0
+            values = {b: sign * self.world.distance(b, landmark) for b in candidates}
+            margin = NEAREST_MARGIN
+        else:
+            axis, sign = EXTREME_AXES[constraint.extreme]
+            values = {b: sign * (self.world.poses[b].x, self.world.poses[b].y)[axis]
+                      for b in candidates}
+            margin = EXTREME_MARGIN
         ranked = sorted(candidates, key=lambda b: -values[b])
-        if values[ranked[0]] - values[ranked[1]] < EXTREME_MARGIN:
+        if values[ranked[0]] - values[ranked[1]] < margin:
             self._tie(ranked[:2], constraint, ref)
         return ranked[1:] if constraint.negated else ranked[:1]
 
+    def position(self, candidates: list[str], constraint, ref: lf.Ref | None) -> list[str]:
+        """The rank-th candidate counted from a side, or the middle one (left to right); its
+        neighbours in the count must stand ORDINAL_MARGIN clear of it."""
+        axis, sign = ORDINAL_AXES[getattr(constraint, "side", "left")]
+        values = {b: sign * (self.world.poses[b].x, self.world.poses[b].y)[axis]
+                  for b in candidates}
+        ranked = sorted(candidates, key=lambda b: values[b])
+        if isinstance(constraint, lf.MiddleIs):
+            if len(ranked) % 2 == 0:
+                if ranked:
+                    raise GroundingError("ambiguous", f"no single middle one among "
+                                                      f"{len(ranked)}: {', '.join(ranked)}",
+                                         tuple(ranked), ref)
+                return []
+            index = len(ranked) // 2
+        else:
+            index = constraint.rank - 1
+            if index >= len(ranked):
+                return []
+        chosen = ranked[index]
+        for neighbour in ranked[max(index - 1, 0):index + 2]:
+            if neighbour != chosen and abs(values[neighbour] - values[chosen]) < ORDINAL_MARGIN:
+                self._tie([chosen, neighbour], constraint, ref)
+        return [chosen]
+
     def _tie(self, tied: list[str], constraint, ref: lf.Ref | None) -> None:
-        word = getattr(constraint, "extreme", None) or getattr(constraint, "size", "")
+        if getattr(constraint, "negated", False):
+            constraint = constraint.model_copy(update={"negated": False})
+        word = notation.constraint(constraint)
         raise GroundingError("ambiguous", f"no single {word} one: {', '.join(tied)} are within "
                                           "tolerance of each other", tuple(tied), ref)
 

@@ -6,12 +6,12 @@ Every known word maps to one grammar terminal and a canonical value: synonyms sh
 
 from __future__ import annotations
 
-import difflib
 import re
 from dataclasses import dataclass
 from functools import cache, lru_cache
 
-from robofollow.errors import UnknownWordError
+from robofollow.compiler.coverage import near_misses, unsupported
+from robofollow.errors import UnknownWordError, UnsupportedConstructError
 
 # terminal -> {word: canonical value}; a terminal listed with a tuple maps every word to itself.
 _CLASSES: dict[str, dict[str, str] | tuple[str, ...]] = {
@@ -35,6 +35,10 @@ _CLASSES: dict[str, dict[str, str] | tuple[str, ...]] = {
         "purple": "purple", "pink": "pink", "white": "white", "black": "black",
         "gray": "gray", "grey": "gray", "brown": "brown",
     },
+    "ORDINAL": {"second": "2", "third": "3", "fourth": "4", "fifth": "5"},
+    "MIDDLE": {"middle": "middle", "center": "middle", "centre": "middle", "central": "middle"},
+    "NEAREST": {"nearest": "nearest", "closest": "nearest"},
+    "FARTHEST": {"farthest": "farthest", "furthest": "farthest"},
     "SIZE": {
         "larger": "larger", "bigger": "larger", "largest": "larger", "biggest": "larger",
         "large": "larger", "big": "larger",
@@ -77,7 +81,7 @@ _CLASSES: dict[str, dict[str, str] | tuple[str, ...]] = {
     "TO": ("to",),
     "AT": ("at",),
     "BEHIND": ("behind",),
-    "BESIDE": ("beside",),
+    "BESIDE": {"beside": "beside", "near": "beside"},
     "NEXT": ("next",),
     "TOUCHING": ("touching",),
     "FROM": ("from",),
@@ -85,6 +89,10 @@ _CLASSES: dict[str, dict[str, str] | tuple[str, ...]] = {
     "OUT": ("out",),
     "OF": ("of",),
     "OVER": {"over": "over", "above": "over"},
+    "BELOW": {"below": "below", "under": "below", "beneath": "below", "underneath": "below"},
+    "BETWEEN": ("between",),
+    "WAY": ("way",),
+    "ALONG": ("along",),
     "VIA": ("via",),
     "AROUND": ("around",),
     "TOWARDS": {"towards": "towards", "toward": "towards"},
@@ -97,6 +105,7 @@ _CLASSES: dict[str, dict[str, str] | tuple[str, ...]] = {
     "STACK": ("stack",),
     "PUSH": {"push": "push", "slide": "push", "shove": "push"},
     "UP": ("up",),
+    "DOWN": ("down",),
     "PICKING": {"picking": "pick"},
     "GRASPING": {"grasping": "grasp", "grabbing": "grasp", "lifting": "grasp"},
     "TAKING": {"taking": "take"},
@@ -108,9 +117,11 @@ _CLASSES: dict[str, dict[str, str] | tuple[str, ...]] = {
     "PASS": ("pass",),
     "PASSING": ("passing",),
     "GO": ("go",),
+    "GOING": ("going",),
     "AVOID": ("avoid",),
     "AVOIDING": ("avoiding",),
     "DETOUR": ("detour",),
+    "DETOURING": ("detouring",),
     "DO": ("do",),
     "INSTEAD": ("instead",),
     "WHILE": ("while",),
@@ -137,6 +148,17 @@ _CLASSES: dict[str, dict[str, str] | tuple[str, ...]] = {
     "BEFORE": ("before",),
     "AFTER": ("after",),
     "AMONG": {"among": "among", "amongst": "among"},
+    # courtesy: no meaning of its own
+    "PLEASE": {"please": "please", "kindly": "please"},
+    "THANKS": ("thanks",),
+    "THANK": ("thank",),
+    "NOW": ("now",),
+    "AHEAD": ("ahead",),
+    "MODAL": {"could": "could", "can": "could", "would": "could", "will": "could"},
+    "YOU": ("you",),
+    "I": ("i",),
+    "WANT": {"want": "want", "need": "want", "like": "want"},
+    "TASK": {"task": "task", "job": "task", "goal": "task"},
 }
 
 # Words that stand for several tokens.
@@ -146,22 +168,31 @@ _EXPANSIONS: dict[str, tuple[str, ...]] = {
     "don't": ("do", "not"),
     "doesn't": ("does", "not"),
     "nonempty": ("non", "empty"),
+    "i'd": ("i", "could"),
+    "that's": ("that", "is"),
+    "lefthand": ("left",),  # 'on the left-hand side'
+    "righthand": ("right",),
+    "there's": ("there", "is"),
+
 }
 
 _PUNCTUATION = {",": "COMMA", ";": "SEMICOLON", ".": "PERIOD"}
-_MARKS = {**_PUNCTUATION, "!": "PERIOD"}
+_MARKS = {**_PUNCTUATION, "!": "PERIOD", "?": "PERIOD"}
 _SEPARATORS = frozenset(_PUNCTUATION.values())
 
-# "and" starts a further modifier (AND_MOD), not a further clause, before these terminals.
+# "and" joins two noun phrases (AND_NP) before a determiner: "pick up A and the B",
+# "between A and the B"; it starts a further modifier (AND_MOD), not a further clause, before
+# these terminals.
+_NOUN_PHRASE_STARTS = frozenset({"THE", "A"})
 _MODIFIER_STARTS = frozenset({
     "NOT", "NON", "COLOR", "SIZE", "EXTREME", "LEFT", "RIGHT", "ON", "IN", "INTO", "ONTO",
     "INSIDE", "TO", "AT", "BEHIND", "BESIDE", "NEXT", "TOUCHING", "FROM", "OFF", "OUT", "OVER",
-    "VIA", "AROUND", "TOWARDS", "THAT", "WHICH",
+    "VIA", "AROUND", "TOWARDS", "THAT", "WHICH", "BELOW", "BETWEEN", "NEAREST", "FARTHEST",
 })
 # A separator right before these is implied by them ("A; otherwise B", "A, if not, B").
 _ABSORBING = frozenset({"OTHERWISE", "IF"})
 
-_WORD_OR_MARK = re.compile(r"[A-Za-z]+(?:['’][A-Za-z]+)?(?:-[A-Za-z]+)*|[,;.!]|\S")
+_WORD_OR_MARK = re.compile(r"[A-Za-z]+(?:['’][A-Za-z]+)?(?:-[A-Za-z]+)*|[,;.!?]|\S")
 
 
 @dataclass(frozen=True, slots=True)
@@ -211,14 +242,17 @@ def _build_vocabulary() -> dict[str, Word]:
 
 
 VOCABULARY: dict[str, Word] = _build_vocabulary()
-TERMINALS: frozenset[str] = frozenset(_CLASSES) | {"AND_MOD", *_PUNCTUATION.values()}
+TERMINALS: frozenset[str] = frozenset(_CLASSES) | {"AND_MOD", "AND_NP", "PLEASE_END",
+                                                  *_PUNCTUATION.values()}
 
 
 @cache
 def words_of(terminal: str) -> tuple[str, ...]:
     """The words that make a terminal, for error messages ("expected: 'up', a colour, ...")."""
-    if terminal == "AND_MOD":
+    if terminal in ("AND_MOD", "AND_NP"):
         return ("and",)
+    if terminal == "PLEASE_END":
+        return ("please",)
     for mark, name in _PUNCTUATION.items():
         if name == terminal:
             return (mark,)
@@ -226,8 +260,8 @@ def words_of(terminal: str) -> tuple[str, ...]:
 
 
 def suggestions(word: str) -> list[str]:
-    """Known words close to an unknown one."""
-    return difflib.get_close_matches(word, [*VOCABULARY, *_EXPANSIONS], n=3, cutoff=0.75)
+    """Known words a misspelt one most likely stands for (real near misses only)."""
+    return near_misses(word, [*VOCABULARY, *_EXPANSIONS])
 
 
 _Words = tuple[tuple[str, str, int, int], ...]  # (terminal, value, offset, length)
@@ -257,7 +291,9 @@ def _analyse(piece: str) -> tuple[_Words, tuple[str, int] | None]:
 
 
 def tokenize(text: str) -> list[WordToken]:
-    """Split an instruction into terminal tokens, each with its 1-based column in `text`."""
+    """Split an instruction into terminal tokens, each with its 1-based column in `text`.
+    Raises UnknownWordError, or UnsupportedConstructError for a known English word that names
+    something the language does not cover."""
     tokens: list[WordToken] = []
     for match in _WORD_OR_MARK.finditer(text):
         piece, start = match.group(), match.start()
@@ -268,6 +304,12 @@ def tokenize(text: str) -> list[WordToken]:
         words, unknown = _analyse(piece)
         if unknown is not None:
             word, offset = unknown
+            construct = unsupported(word)
+            if construct is not None:
+                raise UnsupportedConstructError(
+                    f"not supported: {construct.name} ({word!r}); say instead: "
+                    f"{construct.instead}", text=text, column=start + offset + 1,
+                    length=len(word))
             raise UnknownWordError(f"unknown word {word!r}", text=text, column=start + offset + 1,
                                    length=max(len(word), 1),
                                    suggestions=tuple(suggestions(word.lower())))
@@ -275,8 +317,10 @@ def tokenize(text: str) -> list[WordToken]:
             begin = start + offset
             tokens.append(WordToken(terminal, value, text[begin:begin + length], begin + 1,
                                     begin + length + 1))
-    while tokens and tokens[-1].type == "PERIOD":  # final '.' or '!'
+    while tokens and tokens[-1].type == "PERIOD":  # final '.', '!' or '?'
         tokens.pop()
+    if tokens and tokens[-1].type == "PLEASE":  # '..., please.' closes the instruction
+        tokens[-1].type = "PLEASE_END"
     return _disambiguate(tokens)
 
 
@@ -291,5 +335,7 @@ def _disambiguate(tokens: list[WordToken]) -> list[WordToken]:
             continue
         if token.type == "AND" and following in _MODIFIER_STARTS:
             token.type = "AND_MOD"
+        elif token.type == "AND" and following in _NOUN_PHRASE_STARTS:
+            token.type = "AND_NP"
         result.append(token)
     return result

@@ -22,11 +22,12 @@ Color = Literal["red", "green", "blue", "yellow", "orange", "purple", "pink", "w
 Size = Literal["larger", "smaller"]
 Extreme = Literal["leftmost", "rightmost", "frontmost", "backmost"]
 Relation = Literal["left_of", "right_of", "in_front_of", "behind", "on", "in", "next_to",
-                   "touching"]
+                   "touching", "above", "below"]
 PlaceRelation = Literal["left_of", "right_of", "in_front_of", "behind", "on", "in", "next_to"]
 Arm = Literal["left", "right"]
 Side = Literal["short", "long"]
 Facing = Literal["front", "back", "left", "right"]
+Nearness = Literal["nearest", "farthest"]
 
 
 class Node(BaseModel):
@@ -62,6 +63,20 @@ class NotKind(Node):
     noun: Noun
 
 
+class OrdinalIs(Node):
+    """'the second cube from the left': the rank-th of the candidates counted from a side."""
+
+    type: Literal["ordinal"] = "ordinal"
+    rank: int = Field(ge=1, le=5)
+    side: Facing
+
+
+class MiddleIs(Node):
+    """'the middle cube': the one with as many candidates to its left as to its right."""
+
+    type: Literal["middle"] = "middle"
+
+
 def _simple_landmark(landmark: Ref) -> Ref:
     if not landmark.is_simple:
         raise ValueError("this landmark cannot itself be described by a relation")
@@ -77,10 +92,44 @@ class Related(Node):
     _landmark_is_simple = field_validator("landmark")(_simple_landmark)
 
 
-Constraint = Annotated[Union[ColorIs, SizeIs, ExtremeIs, NotKind, Related],
+class Between(Node):
+    """'between the red ball and the bowl' (the landmarks are a set)."""
+
+    type: Literal["between"] = "between"
+    landmarks: tuple[Ref, Ref]
+    negated: bool = False
+
+    @field_validator("landmarks")
+    @classmethod
+    def _canonical_pair(cls, landmarks: tuple) -> tuple:
+        for landmark in landmarks:
+            _simple_landmark(landmark)
+        pair = _canonical_set(landmarks)
+        if len(pair) != 2:
+            raise ValueError("'between' needs two different landmarks")
+        return pair
+
+
+class NearestIs(Node):
+    """'closest to the bowl' / 'farthest from the bowl' among the other candidates."""
+
+    type: Literal["nearest"] = "nearest"
+    nearness: Nearness
+    landmark: Ref
+    negated: bool = False
+
+    _landmark_is_simple = field_validator("landmark")(_simple_landmark)
+
+
+Constraint = Annotated[Union[ColorIs, SizeIs, ExtremeIs, NotKind, Related, Between, NearestIs,
+                             OrdinalIs, MiddleIs],
                        Field(discriminator="type")]
 
-_CONSTRAINT_ORDER = {"color": 0, "size": 1, "extreme": 2, "not_kind": 3, "relation": 4}
+# comparatives (size ... middle) apply in this order, among what the others leave
+_CONSTRAINT_ORDER = {"color": 0, "size": 1, "extreme": 2, "not_kind": 3, "relation": 4,
+                     "between": 5, "nearest": 6, "ordinal": 7, "middle": 8}
+COMPARATIVES = (SizeIs, ExtremeIs, NearestIs, OrdinalIs, MiddleIs)
+_POSITIONS = (OrdinalIs, MiddleIs)
 
 
 def _canonical_set(items: tuple, order=lambda item: 0) -> tuple:
@@ -100,14 +149,19 @@ class Ref(Node):
     @field_validator("constraints")
     @classmethod
     def _canonical(cls, constraints: tuple) -> tuple:
+        if sum(isinstance(c, _POSITIONS) for c in constraints) > 1:
+            raise ValueError("one description takes at most one ordinal or 'middle'")
         return _canonical_set(constraints, lambda c: _CONSTRAINT_ORDER[c.type])
 
     @property
     def is_simple(self) -> bool:
-        return not any(isinstance(c, Related) for c in self.constraints)
+        """Described by its own words only (no other object named)."""
+        return not any(isinstance(c, (Related, Between, NearestIs)) for c in self.constraints)
 
 
 Related.model_rebuild()
+Between.model_rebuild()
+NearestIs.model_rebuild()
 
 
 # ---------------------------------------------------------------- actions
@@ -149,7 +203,10 @@ class Place(Node):
     @field_validator("route")
     @classmethod
     def _canonical_route(cls, route: tuple) -> tuple:
-        return _canonical_set(route)
+        route = _canonical_set(route)
+        if len({w.landmark for w in route}) != len(route):
+            raise ValueError("a route cannot both pass over and avoid one landmark")
+        return route
 
 
 class Push(Node):
@@ -208,6 +265,25 @@ _INSTRUCTION = TypeAdapter(Instruction)
 def to_json(lf: Instruction, indent: int | None = None) -> str:
     """Canonical JSON: the same meaning always gives the same bytes."""
     return lf.model_dump_json(indent=indent)
+
+
+def constructs(node) -> set[str]:
+    """The kinds of description a form uses: constraint types, and 'relation:<name>' for each
+    relation (what a wording generator may reuse)."""
+    found: set[str] = set()
+    if isinstance(node, tuple):
+        for item in node:
+            found |= constructs(item)
+    elif isinstance(node, BaseModel):
+        if isinstance(node, Related):
+            found.add(f"relation:{node.relation}")
+        if hasattr(node, "type") and isinstance(node, (ColorIs, SizeIs, ExtremeIs, NotKind,
+                                                        Related, Between, NearestIs, OrdinalIs,
+                                                        MiddleIs)):
+            found.add(node.type)
+        for name in type(node).model_fields:
+            found |= constructs(getattr(node, name))
+    return found
 
 
 def from_json(data: str | bytes) -> Instruction:

@@ -10,6 +10,9 @@ from __future__ import annotations
 from robofollow.compiler import lf
 
 
+_ORDINALS = {1: "1st", 2: "2nd", 3: "3rd", 4: "4th", 5: "5th"}
+
+
 def constraint(c: lf.Constraint) -> str:
     if isinstance(c, lf.ColorIs):
         text = c.color
@@ -19,6 +22,14 @@ def constraint(c: lf.Constraint) -> str:
         text = c.extreme
     elif isinstance(c, lf.NotKind):
         return f"not {c.noun}"
+    elif isinstance(c, lf.OrdinalIs):
+        return f"{_ORDINALS[c.rank]} from the {c.side}"
+    elif isinstance(c, lf.MiddleIs):
+        return "middle"
+    elif isinstance(c, lf.Between):
+        text = f"between({', '.join(ref(landmark) for landmark in c.landmarks)})"
+    elif isinstance(c, lf.NearestIs):
+        text = f"{c.nearness}({ref(c.landmark)})"
     else:
         text = f"{c.relation}({ref(c.landmark)})"
     return f"not {text}" if c.negated else text

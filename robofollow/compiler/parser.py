@@ -8,10 +8,10 @@ from lark import Lark, UnexpectedToken
 from lark.lexer import Lexer
 
 from robofollow.compiler import lf
-from robofollow.compiler.lexicon import tokenize, words_of
+from robofollow.compiler.lexicon import VOCABULARY, tokenize, words_of
 from robofollow.compiler.semantics import Semantics
 from robofollow.compiler.syntax import ToSyntax
-from robofollow.errors import UngrammaticalError
+from robofollow.errors import InstructionError, UngrammaticalError, UnknownWordError
 from robofollow.resources import grammar_text
 
 # How an expected terminal is named in error messages (others list their words).
@@ -62,6 +62,21 @@ def _ungrammatical(error: UnexpectedToken, text: str) -> UngrammaticalError:
                               length=token.end_column - token.column, expected=tuple(expected))
 
 
+def _fitting(error: UnknownWordError) -> UnknownWordError:
+    """Keep only the suggestions the grammar accepts where the unknown word stands."""
+    if not error.suggestions:
+        return error
+    try:
+        interactive = _lark().parse_interactive(error.text[:error.column - 1])
+        interactive.exhaust_lexer()
+        accepted = interactive.accepts()
+    except (UnexpectedToken, InstructionError):  # the words before it are wrong too
+        return error
+    error.suggestions = tuple(word for word in error.suggestions
+                              if word not in VOCABULARY or VOCABULARY[word].terminal in accepted)
+    return error
+
+
 def parse(text: str) -> lf.Instruction:
     """Parse one instruction into its canonical logical form.
 
@@ -72,4 +87,6 @@ def parse(text: str) -> lf.Instruction:
         syntax = _lark().parse(text)
     except UnexpectedToken as error:
         raise _ungrammatical(error, text) from None
+    except UnknownWordError as error:
+        raise _fitting(error) from None
     return Semantics(text).instruction(syntax)

@@ -92,7 +92,10 @@ _EXTREME_POSITIONS = {"leftmost": "on the left", "rightmost": "on the right",
                       "frontmost": "in the frontmost position",
                       "backmost": "in the backmost position"}
 _RELATION_WORDS = {"in_front_of": "in front of", "behind": "behind", "on": "on", "in": "in",
-                   "next_to": "next to", "touching": "touching"}
+                   "next_to": "next to", "touching": "touching", "above": "above",
+                   "below": "below"}
+_ORDINAL_WORDS = {1: "first", 2: "second", 3: "third", 4: "fourth", 5: "fifth"}
+_NEARNESS_WORDS = {"nearest": "closest to", "farthest": "farthest from"}
 
 
 @cache
@@ -247,6 +250,14 @@ class Realizer:
             return p.extreme
         if isinstance(p, lf.NotKind):
             return _article(self.noun(p.noun))
+        if isinstance(p, lf.OrdinalIs):
+            return f"the {_ORDINAL_WORDS[p.rank]} {self.from_side(p)}"
+        if isinstance(p, lf.MiddleIs):
+            return "in the middle"
+        if isinstance(p, lf.NearestIs):
+            return f"the {self.nearness_phrase(p)}"
+        if isinstance(p, lf.Between):
+            return self.between_phrase(p)
         return self.relation_phrase(p.relation, p.landmark)
 
     # ---------------------------------------------------------------- referring expressions
@@ -259,6 +270,17 @@ class Realizer:
         else:
             words = _RELATION_WORDS[relation]
         return f"{words} {self.landmark(landmark)}"
+
+    def between_phrase(self, c: lf.Between) -> str:
+        first, second = (self.landmark(landmark) for landmark in c.landmarks)
+        return f"between {first} and {second}"
+
+    def nearness_phrase(self, c: lf.NearestIs) -> str:
+        return f"{_NEARNESS_WORDS[c.nearness]} {self.landmark(c.landmark)}"
+
+    @staticmethod
+    def from_side(c: lf.OrdinalIs) -> str:
+        return f"from the {c.side}"
 
     def destination(self, d: lf.Placement) -> str:
         words = self.s.destinations.get(d.relation)
@@ -277,37 +299,59 @@ class Realizer:
             if c.negated:
                 return "non-" + c.extreme
             return _SIDE_WORDS[c.extreme] if self.s.extreme == "left" else c.extreme
+        if isinstance(c, lf.MiddleIs):
+            return "middle"
         return "non-" + c.noun
+
+    def head(self, ref: lf.Ref, premods: list[str]) -> list[str]:
+        """Premodifiers and noun, inside an ordinal's frame ('second ... cube from the left')
+        when the reference has one."""
+        ordinal = next((c for c in ref.constraints if isinstance(c, lf.OrdinalIs)), None)
+        words = premods + [self.noun(ref.noun)]
+        if ordinal is None:
+            return words
+        return [_ORDINAL_WORDS[ordinal.rank], *words, self.from_side(ordinal)]
 
     def landmark(self, ref: lf.Ref, determiner: bool = True) -> str:
         """A reference described by premodifiers only."""
-        words = [self.premod(c) for c in ref.constraints] + [self.noun(ref.noun)]
-        return ("the " if determiner else "") + " ".join(words)
+        premods = [self.premod(c) for c in ref.constraints if not isinstance(c, lf.OrdinalIs)]
+        return ("the " if determiner else "") + " ".join(self.head(ref, premods))
 
     def ref(self, ref: lf.Ref, determiner: bool = True, relative: bool = False) -> str:
         """A reference; `relative` puts every relation in a relative clause."""
         premods: list[str] = []
         posts: list[tuple[str, str]] = []  # (how it opens when first: "" or "that is", phrase)
         for c in ref.constraints:
+            if isinstance(c, lf.OrdinalIs):
+                continue
             post = self.postmodifier(c, relative)
             if post is None:
                 premods.append(self.premod(c))
             else:
                 posts.append(post)
-        words = premods + [self.noun(ref.noun)]
+        words = self.head(ref, premods)
         if posts:
-            (opening, first), rest = posts[0], [phrase for _, phrase in posts[1:]]
+            # after 'and', 'the closest to X' would start a noun phrase: say 'closest to X'
+            (opening, first), rest = posts[0], [phrase.replace("the closest", "closest")
+                                                .replace("the farthest", "farthest")
+                                                for _, phrase in posts[1:]]
             words.append(" and ".join([f"{opening} {first}".strip()] + rest))
         return ("the " if determiner else "") + " ".join(words)
 
     def postmodifier(self, c: lf.Constraint, relative: bool) -> tuple[str, str] | None:
         """A constraint said after the noun, or None when the style says it before."""
         negated = getattr(c, "negated", False) or isinstance(c, lf.NotKind)
-        if isinstance(c, lf.Related):
-            as_pp = not relative and (self.s.negation == "pp" if negated
-                                      else self.s.relation == "pp")
-            phrase = ("not " if negated else "") + self.relation_phrase(c.relation, c.landmark)
-            return ("" if as_pp else "that is", phrase)
+        if isinstance(c, (lf.Related, lf.Between, lf.NearestIs)):
+            # 'above X' after a transport verb would be a route: always a relative clause
+            as_pp = not relative and getattr(c, "relation", "") != "above" and (
+                self.s.negation == "pp" if negated else self.s.relation == "pp")
+            if isinstance(c, lf.Related):
+                phrase = self.relation_phrase(c.relation, c.landmark)
+            elif isinstance(c, lf.Between):
+                phrase = self.between_phrase(c)
+            else:
+                phrase = self.nearness_phrase(c) if as_pp else f"the {self.nearness_phrase(c)}"
+            return ("" if as_pp else "that is", ("not " if negated else "") + phrase)
         if isinstance(c, lf.ExtremeIs) and not negated and self.s.extreme in ("post", "relative"):
             if self.s.extreme == "post" and not relative:
                 return ("", _EXTREME_POSITIONS[c.extreme])

@@ -18,6 +18,9 @@ Decides what the grammar leaves open, by these documented rules:
   it is the object being handled, or in a conditional branch, what the condition mentions.
 * 'one' stands for the noun of 'among the <nouns>' (else 'object'); 'from/off X' means on X
   (in X for a container); positive 'is a <noun>' narrows the noun.
+* 'over / above X' is a route after a transport verb; after 'pick up', in a relative clause
+  and in a condition it describes an object (vertically above X). 'A and B' after a verb
+  handles each object in turn, with the same destination, route and arm.
 """
 
 from __future__ import annotations
@@ -53,6 +56,9 @@ _DESTINATION_REQUIRED = frozenset({"place", "stack"})
 _PLACE_RELATIONS = frozenset(lf.PlaceRelation.__args__)
 _SIDE_RELATIONS = {"left": "left_of", "right": "right_of"}
 _SIDE_EXTREMES = {"left": "leftmost", "right": "rightmost"}
+_PARTICLES = {"up": ("pick", "grasp"), "down": ("place",)}  # particle -> verbs it goes with
+_UNPLACEABLE = {"between": "between two objects", "above": "above an object (say 'on')",
+                "below": "under an object", "touching": "touching an object"}
 
 # (preposition, target shape) -> (meaning kind, relation or mode)
 _NP_PREPOSITIONS = {
@@ -62,7 +68,7 @@ _NP_PREPOSITIONS = {
     "into": ("destination", "in"), "onto": ("destination", "on"), "to": ("destination", "on"),
     "from": ("source", None), "off": ("source", None), "out_of": ("source", "in"),
     "over": ("route", "via"), "via": ("route", "via"), "around": ("route", "avoid"),
-    "towards": ("toward", None),
+    "towards": ("toward", None), "below": ("relation", "below"),
 }
 _REGION_PREPOSITIONS = {
     ("side", "on"): "extreme", ("side", "at"): "extreme",
@@ -71,6 +77,8 @@ _REGION_PREPOSITIONS = {
     ("top_of", "on"): "relation", ("top_of", "onto"): "destination",
     ("top_of", "to"): "destination", ("top_of", "from"): "source", ("top_of", "off"): "source",
     ("front_of", "in"): "relation", ("direction_of", "in"): "toward",
+    ("middle", "in"): "middle", ("middle", "at"): "middle",
+    ("back_of", "at"): "relation", ("back_of", "in"): "relation", ("back_of", "to"): "relation",
     ("position", "at"): "position", ("position", "to"): "position", ("position", "in"): "position",
 }
 
@@ -82,10 +90,11 @@ class Meaning:
     kind: str  # relation, destination, source, extreme, route, toward, constraint, noun, particle
     column: int
     relation: str | None = None
-    landmark: lf.Ref | It | None = None
+    landmark: lf.Ref | It | tuple[lf.Ref, lf.Ref] | None = None  # a pair for 'between'
     constraint: object = None
     noun: str | None = None
     negated: bool = False
+    preposition: str | None = None  # as said, for a noun-phrase target
 
 
 @dataclass(slots=True)
@@ -104,6 +113,7 @@ class Draft:
     orientation_column: int = 0
     last_landmark: lf.Ref | None = None
     marker: str | None = None  # 'before' / 'after' <gerund>: order relative to its main clause
+    shared: bool = False  # one of several objects named together ('A and B')
 
 
 class Semantics:
@@ -136,7 +146,7 @@ class Semantics:
 
     # ---------------------------------------------------------------- conditions
     def condition(self, phrase: ConditionPhrase) -> tuple[lf.Condition, lf.Ref]:
-        subject = self.describe(phrase.subject, self.meanings(phrase.chain))
+        subject = self.describe(phrase.subject, self.meanings(phrase.chain, describing=True))
         if phrase.kind == "there_is":
             return lf.Exists(ref=subject, negated=phrase.negated), subject
         if phrase.kind in ("contains", "has_on_top"):
@@ -151,6 +161,8 @@ class Semantics:
             claims_empty = not predicate.value
             return lf.Exists(ref=content, negated=claims_empty != phrase.negated), content
         meaning = self.predicate(predicate, phrase.negated, phrase.column)
+        if meaning.kind == "noun" and predicate.kind in ("extreme", "ordinal", "size"):
+            meaning = Meaning("constraint", meaning.column, constraint=meaning.constraint[0])
         if meaning.kind != "constraint":
             raise self.fail(phrase.column, "a condition can test a relation, colour, size or "
                                            "position of an object, not what kind it is")
@@ -198,8 +210,7 @@ class Semantics:
                     self.set_arm(current, segment)
             elif isinstance(segment, Action):
                 current, started = self.action(segment, current, focus, domain)
-                if started is not None:
-                    drafts.append(started)
+                drafts.extend(started)
                 focus = current.object
             elif isinstance(segment, RoutePhrase):
                 self.route(segment, current)
@@ -231,11 +242,14 @@ class Semantics:
         draft.arm = arm.side
 
     def action(self, action: Action, current: Draft | None, focus: lf.Ref | None,
-               domain: lf.Ref | None) -> tuple[Draft, Draft | None]:
-        """Apply an action clause; returns (the current draft, the draft it started or None)."""
-        meanings = self.meanings(action.chain)
+               domain: lf.Ref | None) -> tuple[Draft, list[Draft]]:
+        """Apply an action clause; returns (the current draft, the drafts it started)."""
+        meanings = self.meanings(action.chain, describing=action.verb == "pick")
         anaphoric = isinstance(action.obj, It) or action.obj.det == "that"
         referent = current.object if current is not None else focus
+        if anaphoric and current is not None and current.shared:
+            raise self.fail(action.obj.column, "'it' could be any of the objects named "
+                                               "together before; name the object")
         if anaphoric and referent is None:
             word = "it" if isinstance(action.obj, It) else f"that {action.obj.head}"
             raise self.fail(action.obj.column, f"'{word}' does not refer to anything here")
@@ -244,34 +258,52 @@ class Semantics:
             obj = self.resolve_anaphor(action.obj, referent, described)
         else:
             obj = self.describe(action.obj, described, domain)
+        objects = [self.conjunct(np, chain, action, domain) for np, chain in action.earlier]
         continues = (anaphoric and current is not None and current.kind == "hold"
-                     and obj == current.object and toward is None and action.marker is None)
-        started = None
+                     and obj == current.object and toward is None and action.marker is None
+                     and not objects)
+        started = []
         if not continues:
-            current = started = Draft(object=obj, column=action.column, marker=action.marker)
-        if destination is not None:
-            current.destination, current.kind = destination, "place"
-        if toward is not None:
-            current.toward, current.kind = toward, "push"
-        for waypoint_meaning in route:
-            self.add_waypoint(current, waypoint_meaning.relation, waypoint_meaning.landmark,
-                              waypoint_meaning.column)
-        if action.lead_arm is not None:
-            self.set_arm(current, action.lead_arm)
+            started = [Draft(object=o, column=action.column, marker=action.marker,
+                             shared=bool(objects)) for o in [*objects, obj]]
+            current = started[-1]
+        for draft in started or [current]:
+            if destination is not None:
+                draft.destination, draft.kind = destination, "place"
+            if toward is not None:
+                draft.toward, draft.kind = toward, "push"
+            for waypoint_meaning in route:
+                self.add_waypoint(draft, waypoint_meaning.relation, waypoint_meaning.landmark,
+                                  waypoint_meaning.column)
+            if action.lead_arm is not None:
+                self.set_arm(draft, action.lead_arm)
         return current, started
+
+    def conjunct(self, np: NP | It, chain: list[Link], action: Action,
+                 domain: lf.Ref | None) -> lf.Ref:
+        """An object named before the last one in 'A and B': described by its own words."""
+        if isinstance(np, It) or np.det == "that":
+            raise self.fail(np.column, "name each object of 'A and B' in full")
+        meanings = self.meanings(chain, describing=True)
+        for m in meanings:
+            if m.kind not in ("relation", "source", "extreme", "constraint", "noun"):
+                raise self.fail(m.column, "say where to put the objects after the last one")
+        return self.describe(np, meanings, domain)
 
     def split_chain(self, action: Action, meanings: list[Meaning]):
         """Split a chain into (object modifiers, destination, push target, route links)."""
         route = [m for m in meanings if m.kind == "route"]
         links = [m for m in meanings if m.kind != "route"]
         for m in links:
-            if m.kind == "particle" and action.verb != "pick":
-                raise self.fail(m.column, "'up' goes with 'pick'")
+            if m.kind == "particle" and action.verb not in _PARTICLES[m.relation]:
+                raise self.fail(m.column, f"'{m.relation}' goes with "
+                                          f"'{_PARTICLES[m.relation][0]}'")
         links = [m for m in links if m.kind != "particle"]
         pronoun = isinstance(action.obj, It)
         destination = toward = None
         if action.verb == "push":
-            targets = [i for i, m in enumerate(links) if m.kind == "toward"]
+            targets = [i for i, m in enumerate(links) if m.kind == "toward"] or [
+                i for i, m in enumerate(links) if m.preposition == "to"]  # 'push X to Y'
             if len(targets) != 1:
                 raise self.fail(action.column, "say which way to push: 'towards X' or "
                                                "'in the direction of X'")
@@ -285,11 +317,15 @@ class Semantics:
                 at = candidates[0] if pronoun else candidates[-1]
                 chosen = links[at]
                 if chosen.relation not in _PLACE_RELATIONS:
-                    raise self.fail(chosen.column, f"cannot place an object "
-                                                   f"'{chosen.relation.replace('_', ' ')}' "
-                                                   "something")
+                    raise self.fail(chosen.column, "not supported: placing an object "
+                                    + _UNPLACEABLE.get(chosen.relation, chosen.relation) +
+                                    "; say 'on', 'in', 'next to', 'to the left of', 'to the "
+                                    "right of', 'behind' or 'in front of' one object")
                 landmark = self.extend(chosen.landmark, [], links[at + 1:])
-                destination = lf.Placement(relation=chosen.relation, landmark=landmark)
+                relation = chosen.relation
+                if chosen.preposition == "to" and landmark.noun in _CONTAINERS:
+                    relation = "in"  # 'move it to the bowl'
+                destination = lf.Placement(relation=relation, landmark=landmark)
                 links = links[:at]
             elif action.verb in _DESTINATION_REQUIRED:
                 raise self.fail(action.column, "say where to put it (e.g. 'on the red cube', "
@@ -358,6 +394,11 @@ class Semantics:
         if draft.kind == "push":
             return lf.Push(arm=arm, object=draft.object, toward=draft.toward)
         if draft.kind == "place":
+            modes = {}
+            for waypoint in draft.route:
+                if modes.setdefault(waypoint.landmark, waypoint.mode) != waypoint.mode:
+                    raise self.fail(draft.route_column, "the route both passes over and "
+                                                        "avoids the same object")
             return lf.Place(arm=arm, object=draft.object, destination=draft.destination,
                             route=tuple(draft.route), orientation=draft.orientation)
         if draft.route:
@@ -383,13 +424,20 @@ class Semantics:
             return domain.noun if domain is not None else "object"
         return np.head
 
-    def premod(self, premod) -> lf.ColorIs | lf.SizeIs | lf.ExtremeIs | lf.NotKind:
+    def premod(self, premod) -> lf.Constraint:
         if premod.kind == "color":
             return lf.ColorIs(color=premod.value, negated=premod.negated)
         if premod.kind == "size":
             return lf.SizeIs(size=premod.value)
         if premod.kind == "extreme":
             return lf.ExtremeIs(extreme=premod.value, negated=premod.negated)
+        if premod.kind == "middle":
+            if premod.negated:
+                raise self.fail(premod.column, "'non-middle' is not supported; say 'leftmost', "
+                                               "'rightmost' or 'the second ... from the left'")
+            return lf.MiddleIs()
+        if premod.kind == "ordinal":
+            return lf.OrdinalIs(rank=premod.rank, side=premod.value)
         return lf.NotKind(noun=premod.value)
 
     def describe(self, np: NP, meanings: list[Meaning], domain: lf.Ref | None = None) -> lf.Ref:
@@ -400,7 +448,11 @@ class Semantics:
         constraints = [self.premod(p) for p in np.premods]
         if np.head == "one" and domain is not None:
             constraints.extend(domain.constraints)
-        return self.extend(self.head_noun(np, domain), constraints, meanings)
+        try:
+            return self.extend(self.head_noun(np, domain), constraints, meanings)
+        except ValueError as error:  # e.g. two ordinals for one object
+            raise self.fail(np.column, str(error).splitlines()[-1].split(", input")[0]
+                            .removeprefix("  Value error, ")) from None
 
     def simple(self, np: NP) -> lf.Ref:
         """A landmark: a noun phrase described by its own words only."""
@@ -415,7 +467,9 @@ class Semantics:
                 return noun
             noun, constraints = noun.noun, list(noun.constraints) + constraints
         for m in meanings:
-            if m.kind in ("relation", "source"):
+            if m.kind == "relation" and m.relation == "between":
+                constraints.append(lf.Between(landmarks=m.landmark, negated=m.negated))
+            elif m.kind in ("relation", "source"):
                 constraints.append(lf.Related(relation=m.relation, landmark=m.landmark,
                                               negated=m.negated))
             elif m.kind == "extreme":
@@ -433,14 +487,18 @@ class Semantics:
         return lf.Ref(noun=noun, constraints=tuple(constraints))
 
     # ---------------------------------------------------------------- chain links
-    def meanings(self, chain: list[Link]) -> list[Meaning]:
+    def meanings(self, chain: list[Link], describing: bool = False) -> list[Meaning]:
+        """The chain's links; `describing`: 'over X' describes (above X) rather than routes."""
         result = []
         for link in chain:
             if link.kind == "particle":
-                result.append(Meaning("particle", link.column))
+                result.append(Meaning("particle", link.column, link.value))
             elif link.kind == "pp":
-                meaning = self.pp(link.value)
-                if link.negated:
+                meaning = self.pp(link.value, describing)
+                if link.negated and meaning.kind == "constraint" and hasattr(
+                        meaning.constraint, "negated"):  # 'not closest to X'
+                    meaning.constraint = meaning.constraint.model_copy(update={"negated": True})
+                elif link.negated:
                     if meaning.kind not in ("relation", "extreme"):
                         raise self.fail(link.column, "only a relation or a position can be "
                                                      "negated here")
@@ -457,22 +515,40 @@ class Semantics:
             predicate = Predicate("pp", PP("at", predicate, predicate.column), predicate.column)
         kind, value = predicate.kind, predicate.value
         if kind == "pp":
-            meaning = self.pp(value)
+            meaning = self.pp(value, describing=True)
             if meaning.kind == "source":
                 meaning.kind = "relation"
+            if meaning.kind == "constraint":
+                constraint = meaning.constraint
+                if negated:
+                    if not hasattr(constraint, "negated"):
+                        raise self.fail(column, "'in the middle' cannot be negated")
+                    constraint = constraint.model_copy(update={"negated": True})
+                return Meaning("constraint", column, constraint=constraint)
             if meaning.kind not in ("relation", "extreme"):
                 raise self.fail(value.column, "this phrase cannot describe an object")
-            constraint = (lf.Related(relation=meaning.relation, landmark=meaning.landmark,
-                                     negated=negated) if meaning.kind == "relation" else
-                          lf.ExtremeIs(extreme=meaning.relation, negated=negated))
+            meaning.negated = negated
+            return Meaning("constraint", column, constraint=self.extend(
+                "object", [], [meaning]).constraints[0])
         elif kind == "color":
             constraint = lf.ColorIs(color=value, negated=negated)
+        elif kind == "ordinal":
+            if negated:
+                raise self.fail(column, "'not the second ...' is not supported; describe the "
+                                        "object by what it is")
+            constraint = self.premod(value)
+            if predicate.noun not in (None, "one"):
+                return Meaning("noun", column, noun=predicate.noun, constraint=[constraint])
         elif kind == "extreme":
             constraint = lf.ExtremeIs(extreme=value, negated=negated)
+            if predicate.noun not in (None, "one"):  # 'not the rightmost ball'
+                return Meaning("noun", column, noun=predicate.noun, constraint=[constraint])
         elif kind == "size":
             if negated:
                 raise self.fail(column, "say 'larger' or 'smaller' instead of negating a size")
             constraint = lf.SizeIs(size=value)
+            if predicate.noun not in (None, "one"):  # 'the larger cylinder'
+                return Meaning("noun", column, noun=predicate.noun, constraint=[constraint])
         elif kind == "kind":
             if negated:
                 if value.premods:
@@ -485,8 +561,19 @@ class Semantics:
             raise self.fail(column, "'empty' describes a container in a condition")
         return Meaning("constraint", column, constraint=constraint)
 
-    def pp(self, pp: PP) -> Meaning:
+    def pp(self, pp: PP, describing: bool = False) -> Meaning:
+        """One prepositional phrase; `describing`: 'over X' means above X, not a route."""
         preposition, target = pp.preposition, pp.target
+        if preposition == "between":
+            landmarks = (self.simple(target), self.simple(pp.second))
+            if landmarks[0] == landmarks[1]:
+                raise self.fail(pp.second.column, "'between' needs two different objects")
+            return Meaning("relation", pp.column, "between", landmarks)
+        if preposition in ("nearest", "farthest"):
+            return Meaning("constraint", pp.column, constraint=lf.NearestIs(
+                nearness=preposition, landmark=self.simple(target)))
+        if describing and preposition == "over" and isinstance(target, NP):
+            return Meaning("relation", pp.column, "above", self.simple(target))
         if isinstance(target, It):
             if _NP_PREPOSITIONS.get(preposition, ("",))[0] != "route":
                 raise self.fail(target.column, "'it' can only name a route landmark here")
@@ -499,11 +586,13 @@ class Semantics:
             landmark = self.simple(target)
             if kind == "source" and relation is None:
                 relation = "in" if landmark.noun in _CONTAINERS else "on"
-            return Meaning(kind, pp.column, relation, landmark)
+            return Meaning(kind, pp.column, relation, landmark, preposition=preposition)
         kind = _REGION_PREPOSITIONS.get((target.kind, preposition))
         if kind is None:
             raise self.fail(pp.column, f"'{preposition.replace('_', ' ')}' does not combine "
                                        f"with this phrase")
+        if kind == "middle":
+            return Meaning("constraint", pp.column, constraint=lf.MiddleIs())
         if kind == "position":
             inner = target.inner
             meaning = self.pp(inner) if isinstance(inner, PP) else self.pp(
@@ -519,7 +608,7 @@ class Semantics:
             return Meaning("extreme", pp.column, extreme)
         landmark = self.simple(target.np)
         relation = {"side_of": _SIDE_RELATIONS.get(target.value), "front_of": "in_front_of",
-                    "top_of": "on"}.get(target.kind)
+                    "back_of": "behind", "top_of": "on"}.get(target.kind)
         if kind == "source":
             relation = "on"
         return Meaning(kind, pp.column, relation, landmark)

@@ -86,11 +86,12 @@ def _variants(form: lf.Instruction, describer: Describer, wordings: tuple[str, .
 
 class _Generator:
     def __init__(self, scene: Scene, training: dict[str, Behaviour], training_forms: set[str],
-                 vocabulary: set[tuple[str, str]]):
+                 vocabulary: set[tuple[str, str]], constructs: set[str]):
         self.scene = scene
         self.training = training
         self.training_forms = training_forms
         self.vocabulary = vocabulary
+        self.constructs = constructs
         self.repertoire = Repertoire(scene, training)
         self.tasks: list[TestTask] = []
         self.rejected: list[Rejection] = []
@@ -184,7 +185,7 @@ class _Generator:
         considered in the order the cap ranks them (id digest) until the rule's `max` are kept:
         the cap could choose none after those."""
         if layout not in self.describers:
-            self.describers[layout] = Describer(self.grounders_of(layout)[0])
+            self.describers[layout] = Describer(self.grounders_of(layout)[0], self.constructs)
         candidates = []
         for wording, novel in _variants(form, self.describers[layout], wordings):
             data = lf.to_json(novel)
@@ -260,8 +261,9 @@ def generate(spec: Spec, training: dict[str, Behaviour],
     rejected: list[Rejection] = []
     training_forms = {lf.to_json(f) for t in spec.tasks for f in t.forms}
     vocabulary = {c for t in spec.tasks for p in t.paraphrases for c in concepts(p)}
+    constructs = {c for t in spec.tasks for f in t.forms for c in lf.constructs(f)}
     for scene in spec.scenes.values():
-        generator = _Generator(scene, training, training_forms, vocabulary)
+        generator = _Generator(scene, training, training_forms, vocabulary, constructs)
         for level in levels:
             getattr(generator, f"level{level[1]}")()
             generator.cap(level)

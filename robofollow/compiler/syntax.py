@@ -5,7 +5,7 @@ The records keep words, structure and columns; meaning is decided in semantics.p
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from lark import Transformer
 
@@ -16,11 +16,11 @@ from robofollow.compiler.lexicon import WordToken
 
 @dataclass(slots=True)
 class Premod:
-    kind: str  # color, size, extreme, kind
-    value: str
+    kind: str  # color, size, extreme, middle, ordinal, kind
+    value: str  # for an ordinal: the side it counts from
     negated: bool
     column: int
-
+    rank: int = 0  # for an ordinal
 
 @dataclass(slots=True)
 class Head:
@@ -45,7 +45,8 @@ class It:
 class Region:
     """A target that is not a plain noun phrase: 'the left side of X', 'top of X', ..."""
 
-    kind: str  # side, side_of, extreme_position, top_of, front_of, direction_of, position
+    kind: str  # side, side_of, extreme_position, middle, top_of, front_of, back_of,
+    # direction_of, position
     value: str | None  # left/right or an extreme
     np: NP | None
     inner: PP | Region | None  # for 'the position <pp>'
@@ -54,9 +55,10 @@ class Region:
 
 @dataclass(slots=True)
 class PP:
-    preposition: str
+    preposition: str  # a preposition, or between, nearest, farthest
     target: NP | It | Region
     column: int
+    second: NP | None = None  # between's second landmark
 
 
 @dataclass(slots=True)
@@ -66,6 +68,7 @@ class Predicate:
     kind: str  # pp, region, color, size, extreme, kind, empty
     value: object
     column: int
+    noun: str | None = None  # 'the rightmost ball': the noun said with an extreme
 
 
 @dataclass(slots=True)
@@ -73,7 +76,7 @@ class Link:
     """One element of a modifier chain."""
 
     kind: str  # pp, predicate, particle
-    value: PP | Predicate | None
+    value: PP | Predicate | str  # a particle's word
     negated: bool
     column: int
 
@@ -87,6 +90,8 @@ class Action:
     column: int
     lead_arm: ArmPhrase | None = None
     marker: str | None = None  # before, after, start
+    # 'pick up A and B': the objects named before the last one, each with its own chain
+    earlier: list[tuple[NP | It, list[Link]]] = field(default_factory=list)
 
 
 @dataclass(slots=True)
@@ -149,8 +154,8 @@ class ConditionalPhrase:
 
 # ---------------------------------------------------------------- helpers
 
-_PREMOD_KINDS = {"COLOR": "color", "SIZE": "size", "EXTREME": "extreme", "NOUN": "kind",
-                 "LABEL": "kind"}
+_PREMOD_KINDS = {"COLOR": "color", "SIZE": "size", "EXTREME": "extreme", "MIDDLE": "middle",
+                 "NOUN": "kind", "LABEL": "kind"}
 _SIDE_EXTREMES = {"left": "leftmost", "right": "rightmost", "front": "frontmost",
                   "back": "backmost"}
 _DETERMINERS = frozenset({"THE", "A", "THAT", "NO"})
@@ -192,6 +197,9 @@ def _premods(items) -> list[Premod]:
 class ToSyntax(Transformer):
     """Callbacks named after grammar rules and aliases (rules marked '?' in the grammar pass
     their only child through without a callback)."""
+
+    def start(self, children):  # courtesy words carry no meaning
+        return next(c for c in reversed(children) if not isinstance(c, WordToken))
 
     # ---- conditionals
     def if_(self, children):
@@ -267,9 +275,14 @@ class ToSyntax(Transformer):
         return Among(_premods(words), children[-1].value, children[0].column)
 
     def action(self, children, gerund=False):
-        verb, obj = children[0], children[1]
-        chain = children[2] if len(children) > 2 else []
-        return Action(verb.value, obj, chain, gerund, verb.column)
+        verb, conjuncts = children[0], []
+        for child in children[1:]:
+            if isinstance(child, list):
+                conjuncts[-1] = (conjuncts[-1][0], child)
+            elif not isinstance(child, WordToken):  # an object ('and' is a token)
+                conjuncts.append((child, []))
+        (obj, chain), earlier = conjuncts[-1], conjuncts[:-1]
+        return Action(verb.value, obj, chain, gerund, verb.column, earlier=earlier)
 
     def gerund_action(self, children):
         return self.action(children, gerund=True)
@@ -300,6 +313,20 @@ class ToSyntax(Transformer):
         premods = _premods(children[1 if det else 0:-1])
         return NP(det, premods, children[-1].value, column_of(children[0]))
 
+    def ordinal_np(self, children):
+        """'the second (red) cube from the left'; without a noun, 'one'."""
+        det = children[0].value if children[0].type in _DETERMINERS else None
+        ordinal = children[1 if det else 0]
+        rank = 1 if ordinal.type == "FIRST" else int(ordinal.value)
+        until = next(i for i, c in enumerate(children) if getattr(c, "type", None) == "FROM")
+        words = children[children.index(ordinal) + 1:until]
+        head = "one"
+        if words and isinstance(words[-1], WordToken) and words[-1].type in (
+                "NOUN", "ONE", "LABEL"):
+            head = words.pop().value
+        side = Premod("ordinal", children[-1].value, False, ordinal.column, rank)
+        return NP(det, [side, *_premods(words)], head, children[0].column)
+
     def square_label(self, children):
         return children[-1]
 
@@ -320,7 +347,7 @@ class ToSyntax(Transformer):
     conjoined = relative
 
     def particle(self, children):
-        return Link("particle", None, False, children[0].column)
+        return Link("particle", children[0].value, False, children[0].column)
 
     def predicate(self, children):
         return Predicate("pp", children[0], children[0].column)
@@ -328,20 +355,40 @@ class ToSyntax(Transformer):
     def colour(self, children):
         return Predicate("color", children[0].value, children[0].column)
 
-    def size(self, children):
-        return Predicate("size", children[0].value, children[0].column)
+    def size(self, children):  # 'larger', 'the larger (one)'
+        size = next(c for c in children if c.type == "SIZE")
+        noun = children[-1].value if children[-1] is not size else None
+        return Predicate("size", size.value, children[0].column, noun)
 
-    def extreme(self, children):
-        return Predicate("extreme", children[0].value, children[0].column)
+    def extreme(self, children):  # 'leftmost', 'the leftmost (ball)'
+        extreme = next(c for c in children if c.type == "EXTREME")
+        noun = children[-1].value if children[-1] is not extreme else None
+        return Predicate("extreme", extreme.value, children[0].column, noun)
+
+    def ordinal(self, children):  # 'is the second (cube) from the left'
+        np = self.ordinal_np(children)
+        return Predicate("ordinal", np.premods[0], children[0].column, np.head)
+
+    def the_superlative(self, children):
+        return Predicate("pp", children[-1], children[0].column)
 
     def kind(self, children):
         np = NP(None, _premods(children[1:-1]), children[-1].value, children[0].column)
         return Predicate("kind", np, children[0].column)
 
     def pp(self, children):
+        if len(children) == 1:  # a superlative
+            return children[0]
         preposition, target = children
         name = _PREPOSITION_NAMES.get(preposition.type, preposition.type.lower())
         return PP(name, target, preposition.column)
+
+    def between(self, children):
+        first, second = [c for c in children if isinstance(c, NP)]
+        return PP("between", first, children[0].column, second)
+
+    def superlative(self, children):
+        return PP(children[0].value, children[-1], children[0].column)
 
     def preposition(self, children):  # "next to", "out of", "inside of", "off of"
         return children[0]
@@ -365,8 +412,14 @@ class ToSyntax(Transformer):
     def top_of(self, children):
         return self._region("top_of", children)
 
+    def middle_position(self, children):
+        return self._region("middle", children)
+
     def front_of(self, children):
         return self._region("front_of", children)
+
+    def back_of(self, children):
+        return self._region("back_of", children)
 
     def direction_of(self, children):
         return self._region("direction_of", children)

@@ -18,6 +18,8 @@ from robofollow.compiler.lexicon import tokenize
 
 _PUNCTUATION = frozenset({"COMMA", "SEMICOLON", "PERIOD"})
 _RELATIONS = ("left_of", "right_of", "behind", "in_front_of", "on", "in")
+_VERTICAL = ("above", "below")
+_NEARNESS = ("nearest", "farthest")
 _EXTREMES = ("leftmost", "rightmost")
 _SIDES = ("short", "long")
 _FACINGS = ("front", "back", "left", "right")
@@ -29,11 +31,14 @@ def concepts(text: str) -> set[tuple[str, str]]:
 
 
 class Describer:
-    """Descriptions of bodies that pick them out uniquely in one world (memoised)."""
+    """Descriptions of bodies that pick them out uniquely in one world (memoised), using the
+    kinds of description training instructions use (`constructs`, see lf.constructs; the
+    colour, size, leftmost / rightmost and horizontal relations always)."""
 
-    def __init__(self, grounder: Grounder):
+    def __init__(self, grounder: Grounder, constructs: set[str] = frozenset()):
         self.world = grounder.world
         self.grounder = grounder
+        self.constructs = constructs
         self._simple: dict[str, lf.Ref | None] = {}
         self._descriptions: dict[str, list[lf.Ref]] = {}
 
@@ -70,10 +75,21 @@ class Describer:
         for extreme in _EXTREMES:
             options += [(lf.ExtremeIs(extreme=extreme),),
                         (colour, lf.ExtremeIs(extreme=extreme))]
-        for other in self.world.bodies:
-            landmark = self.simple(other) if other != body else None
-            if landmark is not None:
-                options += [(lf.Related(relation=r, landmark=landmark),) for r in _RELATIONS]
+        relations = _RELATIONS + tuple(r for r in _VERTICAL if f"relation:{r}" in self.constructs)
+        landmarks = [self.simple(other) for other in self.world.bodies if other != body]
+        landmarks = [landmark for landmark in landmarks if landmark is not None]
+        for landmark in landmarks:
+            options += [(lf.Related(relation=r, landmark=landmark),) for r in relations]
+            if "nearest" in self.constructs:
+                options += [(lf.NearestIs(nearness=n, landmark=landmark),) for n in _NEARNESS]
+        if "between" in self.constructs:
+            options += [(lf.Between(landmarks=(a, b)),) for i, a in enumerate(landmarks)
+                        for b in landmarks[i + 1:] if a != b]
+        if "ordinal" in self.constructs:
+            options += [(lf.OrdinalIs(rank=rank, side=side),) for side in _FACINGS
+                        for rank in (1, 2, 3)]
+        if "middle" in self.constructs:
+            options.append((lf.MiddleIs(),))
         refs = (lf.Ref(noun=noun, constraints=constraints)
                 for noun in nouns for constraints in options)  # distinct by construction
         return [ref for ref in refs if self.unique(ref, body)]

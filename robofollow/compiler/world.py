@@ -19,12 +19,18 @@ CONTACT_TOLERANCE = 0.005  # m: gap that still counts as resting on / touching
 EXTREME_MARGIN = 0.02  # m: the leftmost (...) object leads the runner-up by at least this
 SIZE_MARGIN = 0.10  # a larger object's volume exceeds the runner-up's by this fraction
 COLUMN_TOLERANCE = 0.03  # m: bodies this close in x stand in one column (a detour's choice)
+ABOVE_XY_TOLERANCE = ON_XY_TOLERANCE  # m: centre offset that still counts as above / below
+BETWEEN_BAND = 0.05  # m: how far off the line joining two landmarks "between" them reaches
+NEAREST_MARGIN = 0.02  # m: the closest (farthest) object leads the runner-up by at least this
+ORDINAL_MARGIN = EXTREME_MARGIN  # m: "the second from the left" stands clear of its neighbours
 
 # direction of each horizontal relation in the world frame (+x right, +y away from the robot)
 DIRECTIONS = {"left_of": (-1.0, 0.0), "right_of": (1.0, 0.0), "behind": (0.0, 1.0),
               "in_front_of": (0.0, -1.0)}
 EXTREME_AXES = {"leftmost": (0, -1.0), "rightmost": (0, 1.0), "frontmost": (1, -1.0),
                 "backmost": (1, 1.0)}
+# the axis and sign an ordinal counts along, from its side ("from the left": increasing x)
+ORDINAL_AXES = {"left": (0, 1.0), "right": (0, -1.0), "front": (1, 1.0), "back": (1, -1.0)}
 
 
 @dataclass(frozen=True, slots=True)
@@ -91,6 +97,10 @@ class World:
                 return abs(self.bottom(a) - self.table) <= CONTACT_TOLERANCE
             return self._touching(a, b)
         pa, pb = self.poses[a], self.poses[b]
+        if relation in ("above", "below"):
+            upper, lower = (a, b) if relation == "above" else (b, a)
+            return (math.hypot(pa.x - pb.x, pa.y - pb.y) <= ABOVE_XY_TOLERANCE
+                    and self.bottom(upper) >= self.top(lower) - CONTACT_TOLERANCE)
         if relation == "on":
             return (math.hypot(pa.x - pb.x, pa.y - pb.y) <= ON_XY_TOLERANCE
                     and abs(self.bottom(a) - self.top(b)) <= CONTACT_TOLERANCE)
@@ -103,6 +113,23 @@ class World:
         if relation == "next_to":
             return 0 < distance <= RELATION_RANGE
         return in_cone(pa.x - pb.x, pa.y - pb.y, DIRECTIONS[relation]) and distance <= RELATION_RANGE
+
+    def between(self, body: str, a: str, b: str) -> bool:
+        """Whether `body` stands between `a` and `b`: its centre projects strictly inside the
+        segment joining theirs, within BETWEEN_BAND of it."""
+        p, pa, pb = self.poses[body], self.poses[a], self.poses[b]
+        dx, dy = pb.x - pa.x, pb.y - pa.y
+        length = math.hypot(dx, dy)
+        if length < 1e-9:
+            return False
+        along = ((p.x - pa.x) * dx + (p.y - pa.y) * dy) / length
+        across = abs((p.x - pa.x) * dy - (p.y - pa.y) * dx) / length
+        return 0.0 < along < length and across <= BETWEEN_BAND
+
+    def distance(self, a: str, b: str) -> float:
+        """Distance between two bodies' centres in the table plane."""
+        pa, pb = self.poses[a], self.poses[b]
+        return math.hypot(pa.x - pb.x, pa.y - pb.y)
 
     def _touching(self, a: str, b: str) -> bool:
         pa, pb = self.poses[a], self.poses[b]

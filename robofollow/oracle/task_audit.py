@@ -188,7 +188,7 @@ def _distances(error: GroundingError, world: World) -> str:
         return ", ".join(f"{b} at {name} = {100 * (world.poses[b].x, world.poses[b].y)[axis]:.1f}"
                          f" cm" for b in candidates)
     related = next((c for c in (ref.constraints if ref else ())
-                    if isinstance(c, lf.Related)), None)
+                    if isinstance(c, (lf.NearestIs, lf.Related))), None)
     if related is not None:
         try:
             anchor = world.poses[Grounder(world).resolve(related.landmark)]
