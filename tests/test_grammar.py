@@ -20,8 +20,8 @@ def test_grammar_declares_exactly_the_lexicon_terminals():
 
 def test_every_terminal_has_words():
     used = {entry.terminal for entry in VOCABULARY.values()}
-    assert TERMINALS - used == {"AND_MOD", "AND_NP", "PLEASE_END", "COMMA", "SEMICOLON",
-                                "PERIOD"}
+    assert TERMINALS - used == {"AND_MOD", "AND_NP", "PLEASE_END", "NOT_GOING", "COMMA",
+                                "SEMICOLON", "PERIOD"}
 
 
 def test_grammar_is_conflict_free_lalr():

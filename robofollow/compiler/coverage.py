@@ -24,12 +24,11 @@ _UNSUPPORTED: tuple[tuple[Construct, tuple[str, ...]], ...] = (
       "spinning", "twist", "twisting", "upside", "orient", "orientate")),
     (Construct("numbers and counts", "name each object: 'pick up the red cube, then pick up "
                "the blue cube'; positions by 'first' to 'fifth' from a side"),
-     ("zero", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten", "once",
+     ("zero", "two", "three", "four", "five", "six", "seven", "eight", "nine", "ten",
       "twice", "thrice", "pair", "couple", "several", "many", "few", "number", "count",
       "dozen", "half", "sixth", "seventh", "eighth", "ninth", "tenth", "last")),
     (Construct("quantifiers over several objects", "name one object per step"),
-     ("all", "every", "each", "both", "any", "some", "none", "everything", "anything",
-      "nothing", "whole", "rest", "remaining", "others", "either", "neither", "nor",
+     ("all", "every", "each", "both", "any", "some", "none", "everything", "whole", "rest", "remaining", "others", "either", "neither", "nor",
       "everyone", "whichever", "whatever")),
     (Construct("opening, closing and pressing", "pick up, place, stack and push"),
      ("open", "opening", "closing", "lid", "drawer", "door", "handle", "press",
@@ -46,7 +45,7 @@ _UNSUPPORTED: tuple[tuple[Construct, tuple[str, ...]], ...] = (
                "then ...'"),
      ("sort", "sorting", "arrange", "arranging", "line", "align", "aligning", "organize",
       "organise", "tidy", "clear", "swap", "swapping", "exchange", "gather", "collect",
-      "separate", "group", "order", "pile", "heap", "row", "reorder", "spread", "scatter")),
+      "separate", "group", "order", "pile", "heap", "reorder", "spread", "scatter")),
     (Construct("properties other than colour, kind and size",
                "colour words, 'larger' / 'smaller', or a position ('leftmost', 'in the bowl')"),
      ("tall", "taller", "tallest", "heavy", "heavier", "heaviest", "light", "lighter",
@@ -68,13 +67,13 @@ _UNSUPPORTED: tuple[tuple[Construct, tuple[str, ...]], ...] = (
      ("quickly", "slowly", "carefully", "gently", "fast", "slow", "gentle", "careful",
       "firmly", "softly", "quick", "smoothly", "precisely", "exactly", "roughly")),
     (Construct("timing and repetition", "steps in order: 'first ..., then ...'"),
-     ("wait", "waiting", "seconds", "second's", "minute", "minutes", "later", "again",
+     ("wait", "waiting", "seconds", "minute", "minutes", "later", "again", "once",
       "until", "stop", "pause", "repeat", "meanwhile", "simultaneously", "together",
       "during", "soon", "immediately", "finally", "lastly", "afterwards")),
     (Construct("pointing words and plural pronouns", "name the object ('the red cube') or "
                "say 'it' for the object just handled"),
      ("them", "they", "those", "these", "this", "here", "me", "my", "mine", "him", "her",
-      "he", "she", "we", "us", "our", "yours", "someone", "something", "somewhere")),
+      "he", "she", "we", "us", "our", "yours", "someone", "somewhere")),
     (Construct("alternatives and exceptions", "one description ('the cube that is not red') "
                "or a condition ('if ..., otherwise ...')"),
      ("or", "but", "except", "besides", "same", "different",
@@ -89,7 +88,7 @@ _UNSUPPORTED: tuple[tuple[Construct, tuple[str, ...]], ...] = (
       "corner", "corners", "room", "counter", "desk", "hole", "peg", "ring", "jar",
       "cloth", "towel", "sponge", "lego", "brick", "pyramid", "cone", "cuboid", "disk",
       "coin", "card", "paper", "pot", "pan", "spoon", "fork", "knife", "glass", "sticker",
-      "marker", "tile", "mat", "pad", "area", "region", "zone", "target")),
+      "marker", "tile", "mat", "pad", "area", "region", "zone", "target", "row", "column")),
     (Construct("colours other than the scene colours", "red, green, blue, yellow, orange, "
                "purple, pink, white, black, gray (grey), brown"),
      ("violet", "magenta", "cyan", "teal", "beige", "golden", "gold", "silver", "maroon",
@@ -100,7 +99,10 @@ _UNSUPPORTED: tuple[tuple[Construct, tuple[str, ...]], ...] = (
      ("north", "south", "east", "west", "clockwise", "counterclockwise", "anticlockwise",
       "upward", "upwards", "downward", "downwards", "sideways", "vertically",
       "horizontally", "diagonally", "diagonal", "opposite", "across", "through", "against",
-      "along-side", "alongside", "within", "outside", "beyond", "past", "up-side")),
+      "along-side", "alongside", "within", "beyond", "past", "up-side")),
+    (Construct("degrees of a relation", "the relation itself: 'behind "
+               "X', 'to the right of X'"),
+     ("directly", "just", "right-hand", "slightly", "exactly", "immediately", "straight")),
 )
 
 _GRAMMAR_WORDS = frozenset({"is", "are", "not", "and", "the", "a", "an", "of", "to", "it"})
@@ -117,9 +119,16 @@ def _index() -> dict[str, Construct]:
 _INDEX = _index()
 
 
+_POSSESSIVE = Construct("possessives", "a relation: 'to the right of the ball', 'on top of the "
+                        "cube'")
+
+
 def unsupported(word: str) -> Construct | None:
     """The construct a known English word asks for, when the language does not support it."""
-    return _INDEX.get(word.lower())
+    word = word.lower().replace("’", "'")
+    if word.endswith("'s") and len(word) > 2:
+        return _POSSESSIVE
+    return _INDEX.get(word)
 
 
 def unsupported_words() -> frozenset[str]:

@@ -100,7 +100,8 @@ _CLASSES: dict[str, dict[str, str] | tuple[str, ...]] = {
     "GRASP": {"grasp": "grasp", "grab": "grasp", "lift": "grasp"},
     "TAKE": ("take",),
     "REMOVE": ("remove",),
-    "PLACE": {"place": "place", "put": "place", "set": "place"},
+    "PLACE": {"place": "place", "put": "place", "set": "place", "lay": "place",
+              "deposit": "place"},
     "MOVE": ("move",),
     "STACK": ("stack",),
     "PUSH": {"push": "push", "slide": "push", "shove": "push"},
@@ -114,8 +115,8 @@ _CLASSES: dict[str, dict[str, str] | tuple[str, ...]] = {
     "MOVING": {"moving": "move"},
     "STACKING": {"stacking": "stack"},
     "PUSHING": {"pushing": "push", "sliding": "push", "shoving": "push"},
-    "PASS": ("pass",),
-    "PASSING": ("passing",),
+    "PASS": {"pass": "pass", "cross": "pass"},
+    "PASSING": {"passing": "passing", "crossing": "passing"},
     "GO": ("go",),
     "GOING": ("going",),
     "AVOID": ("avoid",),
@@ -131,7 +132,7 @@ _CLASSES: dict[str, dict[str, str] | tuple[str, ...]] = {
     "WITH": ("with",),
     "ARM": {"arm": "arm", "hand": "arm", "gripper": "arm"},
     "LENGTH": ("short", "long"),
-    "SIDE": {"side": "side", "face": "side", "edge": "side"},
+    "SIDE": {"side": "side", "face": "side", "edge": "side", "end": "side"},
     "FACING": {"facing": "facing", "pointing": "facing"},
     "IF": ("if",),
     "WHEN": ("when",),
@@ -159,6 +160,8 @@ _CLASSES: dict[str, dict[str, str] | tuple[str, ...]] = {
     "I": ("i",),
     "WANT": {"want": "want", "need": "want", "like": "want"},
     "TASK": {"task": "task", "job": "task", "goal": "task"},
+    "POSED": {"located": "posed", "sitting": "posed", "resting": "posed", "lying": "posed",
+              "standing": "posed", "situated": "posed", "positioned": "posed"},
 }
 
 # Words that stand for several tokens.
@@ -170,6 +173,10 @@ _EXPANSIONS: dict[str, tuple[str, ...]] = {
     "nonempty": ("non", "empty"),
     "i'd": ("i", "could"),
     "that's": ("that", "is"),
+    "outside": ("not", "in"),
+    "something": ("a", "object"),
+    "anything": ("a", "object"),
+    "nothing": ("no", "object"),
     "lefthand": ("left",),  # 'on the left-hand side'
     "righthand": ("right",),
     "there's": ("there", "is"),
@@ -184,6 +191,7 @@ _SEPARATORS = frozenset(_PUNCTUATION.values())
 # "between A and the B"; it starts a further modifier (AND_MOD), not a further clause, before
 # these terminals.
 _NOUN_PHRASE_STARTS = frozenset({"THE", "A"})
+_ROUTE_GERUNDS = frozenset({"PASSING", "MOVING", "GOING"})
 _MODIFIER_STARTS = frozenset({
     "NOT", "NON", "COLOR", "SIZE", "EXTREME", "LEFT", "RIGHT", "ON", "IN", "INTO", "ONTO",
     "INSIDE", "TO", "AT", "BEHIND", "BESIDE", "NEXT", "TOUCHING", "FROM", "OFF", "OUT", "OVER",
@@ -242,7 +250,7 @@ def _build_vocabulary() -> dict[str, Word]:
 
 
 VOCABULARY: dict[str, Word] = _build_vocabulary()
-TERMINALS: frozenset[str] = frozenset(_CLASSES) | {"AND_MOD", "AND_NP", "PLEASE_END",
+TERMINALS: frozenset[str] = frozenset(_CLASSES) | {"AND_MOD", "AND_NP", "PLEASE_END", "NOT_GOING",
                                                   *_PUNCTUATION.values()}
 
 
@@ -253,6 +261,8 @@ def words_of(terminal: str) -> tuple[str, ...]:
         return ("and",)
     if terminal == "PLEASE_END":
         return ("please",)
+    if terminal == "NOT_GOING":
+        return ("not",)
     for mark, name in _PUNCTUATION.items():
         if name == terminal:
             return (mark,)
@@ -337,5 +347,7 @@ def _disambiguate(tokens: list[WordToken]) -> list[WordToken]:
             token.type = "AND_MOD"
         elif token.type == "AND" and following in _NOUN_PHRASE_STARTS:
             token.type = "AND_NP"
+        elif token.type == "NOT" and following in _ROUTE_GERUNDS:  # 'not passing over X'
+            token.type = "NOT_GOING"
         result.append(token)
     return result

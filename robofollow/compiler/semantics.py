@@ -52,6 +52,9 @@ _WORD = re.compile(r"[A-Za-z'’-]+")
 _NOUN_PARENTS = {"cube": "block", "slab": "block"}
 _CONTAINERS = frozenset({"bowl"})
 _TRANSPORT_VERBS = frozenset({"place", "stack", "move", "take", "remove"})
+_PICK_VERBS = frozenset({"pick", "grasp"})
+# 'take X on Y' names where X is; 'take X onto / to Y' where it goes
+_DESTINATION_KINDS = {"take": ("destination",)}
 _DESTINATION_REQUIRED = frozenset({"place", "stack"})
 _PLACE_RELATIONS = frozenset(lf.PlaceRelation.__args__)
 _SIDE_RELATIONS = {"left": "left_of", "right": "right_of"}
@@ -146,6 +149,8 @@ class Semantics:
 
     # ---------------------------------------------------------------- conditions
     def condition(self, phrase: ConditionPhrase) -> tuple[lf.Condition, lf.Ref]:
+        if phrase.kind == "is" and phrase.subject.det in ("a", "no"):
+            return self.indefinite(phrase)
         subject = self.describe(phrase.subject, self.meanings(phrase.chain, describing=True))
         if phrase.kind == "there_is":
             return lf.Exists(ref=subject, negated=phrase.negated), subject
@@ -167,6 +172,16 @@ class Semantics:
             raise self.fail(phrase.column, "a condition can test a relation, colour, size or "
                                            "position of an object, not what kind it is")
         return lf.Holds(subject=subject, property=meaning.constraint), subject
+
+    def indefinite(self, phrase: ConditionPhrase) -> tuple[lf.Condition, lf.Ref]:
+        """'if an object is on the cube' = 'if there is an object on the cube' ('no object is
+        ...': there is none)."""
+        meaning = self.predicate(phrase.predicate, phrase.negated, phrase.column)
+        if meaning.kind != "constraint":
+            raise self.fail(phrase.column, "say 'if there is a <noun> ...'")
+        meanings = self.meanings(phrase.chain, describing=True) + [meaning]
+        ref = self.describe(phrase.subject, meanings)
+        return lf.Exists(ref=ref, negated=phrase.subject.det == "no"), ref
 
     def landmark(self, ref: lf.Ref, phrase: ConditionPhrase) -> lf.Ref:
         if not ref.is_simple:
@@ -244,7 +259,7 @@ class Semantics:
     def action(self, action: Action, current: Draft | None, focus: lf.Ref | None,
                domain: lf.Ref | None) -> tuple[Draft, list[Draft]]:
         """Apply an action clause; returns (the current draft, the drafts it started)."""
-        meanings = self.meanings(action.chain, describing=action.verb == "pick")
+        meanings = self.meanings(action.chain, describing=action.verb in _PICK_VERBS)
         anaphoric = isinstance(action.obj, It) or action.obj.det == "that"
         referent = current.object if current is not None else focus
         if anaphoric and current is not None and current.shared:
@@ -259,9 +274,10 @@ class Semantics:
         else:
             obj = self.describe(action.obj, described, domain)
         objects = [self.conjunct(np, chain, action, domain) for np, chain in action.earlier]
+        # 'pick up X before placing it on Y' is one placement, like 'pick up X and place it'
         continues = (anaphoric and current is not None and current.kind == "hold"
-                     and obj == current.object and toward is None and action.marker is None
-                     and not objects)
+                     and obj == current.object and toward is None
+                     and action.marker in (None, "before") and not objects)
         started = []
         if not continues:
             started = [Draft(object=o, column=action.column, marker=action.marker,
@@ -311,8 +327,8 @@ class Semantics:
             toward = self.extend(links[at].landmark, [], links[at + 1:])
             links = links[:at]
         elif action.verb in _TRANSPORT_VERBS:
-            candidates = [i for i, m in enumerate(links)
-                          if m.kind in ("relation", "destination") and not m.negated]
+            kinds = _DESTINATION_KINDS.get(action.verb, ("relation", "destination"))
+            candidates = [i for i, m in enumerate(links) if m.kind in kinds and not m.negated]
             if candidates:
                 at = candidates[0] if pronoun else candidates[-1]
                 chosen = links[at]
@@ -518,6 +534,8 @@ class Semantics:
             meaning = self.pp(value, describing=True)
             if meaning.kind == "source":
                 meaning.kind = "relation"
+                if value.preposition.startswith("off"):  # 'that is off the table'
+                    negated = not negated
             if meaning.kind == "constraint":
                 constraint = meaning.constraint
                 if negated:

@@ -339,7 +339,7 @@ class ToSyntax(Transformer):
         return children
 
     def link(self, children):
-        return Link("pp", children[-1], len(children) == 2, children[0].column)
+        return Link("pp", children[-1], _has(children, "NOT"), children[0].column)
 
     def relative(self, children):
         return Link("predicate", children[-1], _has(children, "NOT"), children[0].column)
