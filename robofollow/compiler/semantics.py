@@ -124,6 +124,7 @@ class Semantics:
 
     def __init__(self, text: str):
         self.text = text
+        self.domain: lf.Ref | None = None  # 'among the <nouns>': what a later 'one' stands for
 
     def fail(self, column: int, message: str) -> UnsupportedConstructError:
         return UnsupportedConstructError(message, text=self.text, column=column,
@@ -204,6 +205,7 @@ class Semantics:
         current: Draft | None = None
         default_arm: str | None = None
         domain: lf.Ref | None = None
+        fronted: list[RoutePhrase | OrientationPhrase] = []
         after_break = True
         segments = steps.segments
         for index, segment in enumerate(segments):
@@ -212,8 +214,8 @@ class Semantics:
                 after_break = True
                 continue
             if isinstance(segment, Among):
-                domain = lf.Ref(noun=segment.noun,
-                                constraints=tuple(self.premod(p) for p in segment.premods))
+                domain = self.domain = lf.Ref(noun=segment.noun, constraints=tuple(
+                    self.premod(p) for p in segment.premods))
             elif isinstance(segment, ArmPhrase):
                 if current is None and not drafts:
                     default_arm = segment.side
@@ -227,10 +229,20 @@ class Semantics:
                 current, started = self.action(segment, current, focus, domain)
                 drafts.extend(started)
                 focus = current.object
+            elif isinstance(segment, (RoutePhrase, OrientationPhrase)) and current is None and \
+                    isinstance(following, Action | Break) and not drafts:
+                fronted.append(segment)  # 'Passing over X, move Y onto Z': for the first action
             elif isinstance(segment, RoutePhrase):
                 self.route(segment, current)
             elif isinstance(segment, OrientationPhrase):
                 self.orientation(segment, current)
+            if fronted and current is not None:
+                for phrase in fronted:
+                    if isinstance(phrase, RoutePhrase):
+                        self.route(phrase, current)
+                    else:
+                        self.orientation(phrase, current)
+                fronted.clear()
             after_break = False
         if current is None:
             raise self.fail(steps.column, "no action: say what to do (pick up, place, push ...)")
@@ -462,6 +474,7 @@ class Semantics:
             raise self.fail(np.column, "'that <noun>' refers back to an object; none is "
                                        "mentioned before it")
         constraints = [self.premod(p) for p in np.premods]
+        domain = domain or self.domain
         if np.head == "one" and domain is not None:
             constraints.extend(domain.constraints)
         try:
