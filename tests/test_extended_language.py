@@ -166,6 +166,14 @@ def test_avoiding_by_detouring_is_one_constraint():
      "pick(any arm, sphere); then pick(right, cube)"),
     ("The task is to pick up the cylinder that is the larger one.",
      "pick(any arm, cylinder[larger])"),
+    ("Let's pick up the cube.", "pick(any arm, cube)"),
+    ("Okay, pick up the cube.", "pick(any arm, cube)"),
+    ("Pick up the block in between the red ball and the red cylinder.",
+     "pick(any arm, block[between(cylinder[red], sphere[red])])"),
+    ("Put the leftmost block at the front of the green ball.",
+     "place(any arm, block[leftmost] -> in_front_of(sphere[green]))"),
+    ("Place the leftmost block behind the green ball after picking it up.",
+     "place(any arm, block[leftmost] -> behind(sphere[green]))"),
 ])
 def test_new_constructs_have_canonical_forms(text, expected):
     assert form(text) == expected
@@ -314,12 +322,12 @@ OUT_OF_LANGUAGE = [
     ("Pick up the red or the blue cube.", "alternatives and exceptions", 17),
     ("Pick up any cube except the red one.", "quantifiers", 9),
     ("Pick up the cube that is larger than the ball.", "comparing with a named object", 33),
-    ("Put the cube in the box.", "objects and places not in the scenes", 21),
-    ("Place the ball on the plate.", "objects and places not in the scenes", 23),
+    ("Put the cube in the box.", "objects and table regions not in the scenes", 21),
+    ("Place the ball on the plate.", "objects and table regions not in the scenes", 23),
     ("Pick up the violet cube.", "colours other than", 13),
     ("Push the cube north.", "directions in the camera's", 15),
     ("Move the cube across the table.", "directions in the camera's", 15),
-    ("Pick up the cube in the corner.", "objects and places not in the scenes", 25),
+    ("Pick up the cube in the corner.", "objects and table regions not in the scenes", 25),
     ("Pick up the cube on the ball's right.", "possessives", 25),
     ("Pick up the cube directly behind the ball.", "degrees of a relation", 18),
 ]

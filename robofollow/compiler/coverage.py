@@ -81,8 +81,9 @@ _UNSUPPORTED: tuple[tuple[Construct, tuple[str, ...]], ...] = (
     (Construct("comparing with a named object ('than')", "'larger' / 'smaller' among the "
                "objects described, or 'closest to X'"),
      ("than", "as")),
-    (Construct("objects and places not in the scenes", "the objects on the table: block, "
-               "cube, cylinder, sphere (ball), slab (bar), bowl, label, table"),
+    (Construct("objects and table regions not in the scenes", "the objects on the table: "
+               "block, cube, cylinder, sphere (ball), slab (bar), bowl, label, table; "
+               "positions by relations ('in front of the bowl', 'the leftmost cube')"),
      ("box", "boxes", "cup", "cups", "mug", "plate", "plates", "tray", "basket", "container",
       "bin", "bottle", "pen", "apple", "banana", "toy", "shelf", "robot", "floor", "ground",
       "corner", "corners", "room", "counter", "desk", "hole", "peg", "ring", "jar",

@@ -79,7 +79,8 @@ _REGION_PREPOSITIONS = {
     ("side_of", "to"): "relation", ("side_of", "on"): "relation", ("side_of", "at"): "relation",
     ("top_of", "on"): "relation", ("top_of", "onto"): "destination",
     ("top_of", "to"): "destination", ("top_of", "from"): "source", ("top_of", "off"): "source",
-    ("front_of", "in"): "relation", ("direction_of", "in"): "toward",
+    ("front_of", "in"): "relation", ("front_of", "at"): "relation", ("front_of", "to"): "relation",
+    ("direction_of", "in"): "toward",
     ("middle", "in"): "middle", ("middle", "at"): "middle",
     ("back_of", "at"): "relation", ("back_of", "in"): "relation", ("back_of", "to"): "relation",
     ("position", "at"): "position", ("position", "to"): "position", ("position", "in"): "position",
@@ -285,6 +286,9 @@ class Semantics:
             obj = self.resolve_anaphor(action.obj, referent, described)
         else:
             obj = self.describe(action.obj, described, domain)
+        if (anaphoric and action.marker == "after" and action.verb in _PICK_VERBS
+                and current is not None and obj == current.object and not action.earlier):
+            return current, []  # 'place X on Y after picking it up': the placement picks it
         objects = [self.conjunct(np, chain, action, domain) for np, chain in action.earlier]
         # 'pick up X before placing it on Y' is one placement, like 'pick up X and place it'
         continues = (anaphoric and current is not None and current.kind == "hold"

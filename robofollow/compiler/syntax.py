@@ -383,7 +383,7 @@ class ToSyntax(Transformer):
         name = _PREPOSITION_NAMES.get(preposition.type, preposition.type.lower())
         return PP(name, target, preposition.column)
 
-    def between(self, children):
+    def between(self, children):  # '(in) between A and B'
         first, second = [c for c in children if isinstance(c, NP)]
         return PP("between", first, children[0].column, second)
 
