@@ -1,4 +1,9 @@
-"""parse(text) -> canonical logical form, with the project's own errors."""
+"""parse(text) -> canonical logical form, with the project's own errors.
+
+lark builds the LALR(1) tables (strict: conflict-free) and the syntax callbacks; a small loop
+of our own drives them over the lexicon's tokens, which saves lark's per-token bookkeeping on
+the hot path (the interactive parser, for error suggestions, is lark's own).
+"""
 
 from __future__ import annotations
 
@@ -6,9 +11,10 @@ from functools import cache
 
 from lark import Lark, UnexpectedToken
 from lark.lexer import Lexer
+from lark.parsers.lalr_analysis import Shift
 
 from robofollow.compiler import lf
-from robofollow.compiler.lexicon import VOCABULARY, tokenize, words_of
+from robofollow.compiler.lexicon import VOCABULARY, WordToken, tokenize, words_of
 from robofollow.compiler.semantics import Semantics
 from robofollow.compiler.syntax import ToSyntax
 from robofollow.errors import InstructionError, UngrammaticalError, UnknownWordError
@@ -42,18 +48,62 @@ def _lark() -> Lark:
                 transformer=ToSyntax(), strict=True)
 
 
+@cache
+def _machine() -> tuple[dict, int, int]:
+    """The parse table as {state: {symbol: (True, next state) | (False, (size, goto symbol,
+    callback))}}, the start state and the accepting state."""
+    inner = _lark().parser.parser.parser
+    table, callbacks = inner.parse_table, inner.callbacks
+    states = {}
+    for state, actions in table.states.items():
+        # plain str keys: lark's rule names are Token objects, slower to hash and compare
+        states[state] = {str(symbol): (True, arg) if action is Shift else
+                         (False, (len(arg.expansion), str(arg.origin.name), callbacks[arg]))
+                         for symbol, (action, arg) in actions.items()}
+    return states, table.start_states["start"], table.end_states["start"]
+
+
+def _syntax(text: str):
+    """The syntax records of an instruction (raises UngrammaticalError)."""
+    states, start, accept = _machine()
+    tokens = tokenize(text)
+    last = tokens[-1] if tokens else None
+    end = WordToken("$END", "", "", last.column if last else 1, last.end_column if last else 1)
+    stack, values = [start], []
+    for token in tokens + [end]:
+        while True:
+            row = states[stack[-1]]
+            entry = row.get(token.type)
+            if entry is None:
+                raise _ungrammatical(token, [s for s in row if s.isupper()], text)
+            shift, arg = entry
+            if shift:
+                stack.append(arg)
+                values.append(token)
+                break
+            size, goto, callback = arg
+            if size:
+                children = values[-size:]
+                del values[-size:], stack[-size:]
+            else:
+                children = []
+            values.append(callback(children))
+            stack.append(states[stack[-1]][goto][1])
+            if token is end and stack[-1] == accept:
+                return values[-1]
+
+
 def terminal_name(terminal: str) -> str:
     if terminal in _TERMINAL_NAMES:
         return _TERMINAL_NAMES[terminal]
     return repr(words_of(terminal)[0])
 
 
-def _ungrammatical(error: UnexpectedToken, text: str) -> UngrammaticalError:
-    expected = sorted({terminal_name(t) for t in error.expected})
+def _ungrammatical(token: WordToken, expected_terminals, text: str) -> UngrammaticalError:
+    expected = sorted({terminal_name(t) for t in expected_terminals})
     if len(expected) > _MAX_EXPECTED:
         expected = expected[:_MAX_EXPECTED] + ["..."]
-    token = error.token
-    if token.type == "$END":  # lark places it at the last word
+    if token.type == "$END":  # placed at the last word
         column = token.end_column or 1
         message = ("the instruction is empty" if not text.strip()
                    else "the instruction ends too early")
@@ -84,9 +134,7 @@ def parse(text: str) -> lf.Instruction:
     InstructionError) with the 1-based column of the first bad word.
     """
     try:
-        syntax = _lark().parse(text)
-    except UnexpectedToken as error:
-        raise _ungrammatical(error, text) from None
+        syntax = _syntax(text)
     except UnknownWordError as error:
         raise _fitting(error) from None
     return Semantics(text).instruction(syntax)
