@@ -26,6 +26,7 @@ from robofollow.compiler.spec_loader import load_partial
 from robofollow.compiler.splits import Splits, TestTask, episode_seed, generate
 from robofollow.compiler.training import training_behaviours
 from robofollow.compiler.world import World
+from robofollow.data.files import json_line
 from robofollow.errors import RoboFollowError, SpecErrors
 from robofollow.oracle.audit import FINDING_KEYS, audit, findings
 from robofollow.oracle.task_audit import listed_tests
@@ -79,7 +80,7 @@ def _compile(specs: Path | list[Path]) -> Compiled:
 
 
 def _line(record: dict) -> str:
-    return json.dumps(record, sort_keys=True, ensure_ascii=False) + "\n"
+    return json_line(record, sort_keys=True)
 
 
 def episodes(compiled: Compiled, task: TestTask) -> list[dict]:

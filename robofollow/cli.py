@@ -16,6 +16,7 @@ from robofollow.compiler.notation import notation
 from robofollow.compiler.parser import parse
 from robofollow.compiler.realize import STYLES, realize
 from robofollow.compiler.spec import LEVELS
+from robofollow.data.files import json_line
 from robofollow.data.jobs import FORMATS, INSTRUCTION_MODES
 from robofollow.errors import InstructionError, RoboFollowError
 from robofollow.workers import EXECUTORS
@@ -48,23 +49,25 @@ def _parse_one(text: str, args) -> int:
 
 
 def _parse_stream(stream, out) -> int:
+    """One output record per input line, blank lines included (an 'empty' error)."""
     status = 0
     for line in stream:
-        text = line.rstrip("\n")
-        if not text.strip():
-            continue
+        text = line.removesuffix("\n").removesuffix("\r")
         try:
             record = {"text": text, "lf": parse(text).model_dump(mode="json")}
         except InstructionError as error:
             record, status = {"text": text, "error": error.to_dict()}, 1
-        out.write(json.dumps(record, ensure_ascii=False) + "\n")
+        out.write(json_line(record))
+        out.flush()
     return status
 
 
 def _stdin_lines():
-    """Standard input as text; bytes that are not UTF-8 become U+FFFD (an unknown word)."""
+    """Standard input as text split at '\\n' only (a stray '\\r' stays in its line); bytes
+    that are not UTF-8 become U+FFFD (an unknown word)."""
     if hasattr(sys.stdin, "buffer"):
-        return io.TextIOWrapper(sys.stdin.buffer, encoding="utf-8", errors="replace")
+        return io.TextIOWrapper(sys.stdin.buffer, encoding="utf-8", errors="replace",
+                                newline="\n")
     return sys.stdin
 
 

@@ -43,12 +43,24 @@ def test_parse_stdin_writes_json_lines_and_exits_1_on_any_failure(capsys, monkey
     status, out, _ = run(capsys, "parse", "-")
     records = [json.loads(line) for line in out.splitlines()]
     assert status == 1
-    assert [r["text"] for r in records] == ["Pick up the red cube.", "Place it behind.",
-                                            "Pick up the ball."]
+    assert [r["text"] for r in records] == ["Pick up the red cube.", "", "Place it behind.",
+                                            "Pick up the ball."]  # one answer per line
     assert records[0]["lf"]["object"]["noun"] == "cube"
-    assert records[1]["error"] == {"type": "ungrammatical", "column": 16,
+    assert records[1]["error"]["message"] == "the instruction is empty"
+    assert records[2]["error"] == {"type": "ungrammatical", "column": 16,
                                    "message": "the instruction ends too early"}
-    assert records[2]["lf"]["object"]["noun"] == "sphere"
+    assert records[3]["lf"]["object"]["noun"] == "sphere"
+
+
+def test_parse_stdin_splits_records_at_newlines_only():
+    text = "Pick up the\rcube.\r\nPick up the ball\u2028now.\n"
+    result = subprocess.run(["robofollow", "parse", "-"], input=text.encode(),
+                            capture_output=True)
+    lines = result.stdout.split(b"\n")[:-1]
+    assert len(lines) == 2 and b"\xe2\x80\xa8" not in result.stdout  # U+2028 escaped
+    records = [json.loads(line) for line in lines]
+    assert records[0]["text"] == "Pick up the\rcube." and records[0]["lf"]["type"] == "pick"
+    assert records[1]["text"] == "Pick up the ball\u2028now."
 
 
 def test_parse_stdin_all_good_exits_0(capsys, monkeypatch):

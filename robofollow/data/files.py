@@ -13,10 +13,18 @@ def write_json(path: Path, data) -> None:
     path.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
 
 
+def json_line(record, sort_keys: bool = False) -> str:
+    """One JSON Lines record with its newline. Text stays readable UTF-8, except U+2028 and
+    U+2029, which are escaped: line-splitting readers (Python's str.splitlines, JavaScript)
+    would break the record at them."""
+    text = json.dumps(record, ensure_ascii=False, sort_keys=sort_keys)
+    return text.replace("\u2028", "\\u2028").replace("\u2029", "\\u2029") + "\n"
+
+
 def write_jsonl(path: Path, records) -> None:
     path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "w", encoding="utf-8") as f:
-        f.writelines(json.dumps(r, ensure_ascii=False) + "\n" for r in records)
+        f.writelines(json_line(r) for r in records)
 
 
 def write_json_atomic(path: Path, data) -> None:

@@ -20,7 +20,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from robofollow.build import Compiled, all_episodes
-from robofollow.data.files import changed_options, write_json_atomic
+from robofollow.data.files import changed_options, json_line, write_json_atomic
 from robofollow.errors import RoboFollowError
 from robofollow.eval.chance import references
 from robofollow.eval.episode import EpisodeRun, run_episode
@@ -141,7 +141,7 @@ def read_results(path: Path) -> list[dict]:
     if len(whole) != len(data):
         with open(path, "r+b") as f:
             f.truncate(len(whole))
-    return [json.loads(line) for line in whole.decode("utf-8").splitlines() if line.strip()]
+    return [json.loads(line) for line in whole.decode("utf-8").split("\n") if line.strip()]
 
 
 def summary(results: list[dict], options: EvalOptions) -> dict:
@@ -183,7 +183,7 @@ def evaluate(compiled: Compiled, out: Path, options: EvalOptions, workers: int =
     with bar, open(results_path, "a", encoding="utf-8") as sink:
         make = partial(Evaluator, compiled, options, out)
         for record in results(make, todo, workers, executor):
-            sink.write(json.dumps(record, ensure_ascii=False) + "\n")  # one whole line
+            sink.write(json_line(record))  # one whole line
             sink.flush()
             finished.append(record)
             bar.update()
