@@ -206,7 +206,8 @@ def test_a_hung_in_process_policy_is_cut_at_its_time_limit_in_the_worker_pool(tm
     args = ["eval", "--policy", "tests.test_eval_runner:make_sleeper", "--out", str(out),
             "--specs", str(builtin_specs()), "--rounds", "1", "--workers", "2", "--quiet",
             "--tasks", two, "--policy-timeout", "1"]
-    assert main(args) == 0
+    assert main(args) == 3  # finished, with policy failures
+    assert "2 of 2 episodes ended in a policy failure" in capsys.readouterr().out
     results = read_results(out / "episodes.jsonl")
     assert [(r["error"], r["steps"]) for r in results] == [
         ("step 0: the policy did not answer within 1 s", 0)] * 2

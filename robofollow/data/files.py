@@ -28,10 +28,15 @@ def write_jsonl(path: Path, records) -> None:
 
 
 def write_json_atomic(path: Path, data) -> None:
-    """Write through a temporary file and rename: readers see the old file or the new one."""
+    """Write through a temporary file and rename: readers see the old file or the new one
+    (and a write that fails, e.g. on a full disk, leaves no temporary file behind)."""
     partial = path.with_name(path.name + ".partial")
-    write_json(partial, data)
-    os.replace(partial, path)
+    try:
+        write_json(partial, data)
+        os.replace(partial, path)
+    except BaseException:
+        partial.unlink(missing_ok=True)
+        raise
 
 
 def link_or_copy(source: Path, target: Path) -> None:

@@ -1,8 +1,10 @@
 """One evaluation episode, as upstream's protocol: reset the episode's layout with its seed,
 then query the policy for action chunks and execute them (at most CHUNK_LIMIT actions of each)
 until the fixed action budget is spent; nothing ends an episode early except a policy failure
-(an exception, a chunk that is not [T, 14] finite numbers or, with a time limit, a call that
-runs past it), which is recorded. Targets past a joint limit are clipped to it and counted. The recording is scored by the oracle."""
+(an exception, SystemExit included, a chunk that is not [T, 14] finite numbers or, with a time
+limit, a call that runs past it), which is recorded; KeyboardInterrupt still stops the caller.
+Targets past a joint limit are clipped to it and counted. The recording is scored by the
+oracle."""
 
 from __future__ import annotations
 
@@ -12,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from robofollow.build import Compiled
-from robofollow.eval.deadline import PolicyTimeout, deadline
+from robofollow.eval.deadline import PolicyTimeout, check_deadline, deadline
 from robofollow.eval.policy import BadActionError, Policy, Privileged, validate_actions
 from robofollow.oracle.results import EpisodeScore
 from robofollow.scoring import score_recording
@@ -49,27 +51,37 @@ def observation(policy: Policy, stage: Stage, instruction: str, steps: int,
     return obs
 
 
-def _failure(failure: Exception) -> str:
+def _failure(failure: BaseException) -> str:
     if isinstance(failure, BadActionError | PolicyTimeout):
         return str(failure)
+    if not isinstance(failure, Exception) or not str(failure):  # SystemExit(0), GeneratorExit()
+        return f"the policy raised {failure!r}"
     return f"the policy raised {type(failure).__name__}: {failure}"
 
 
-def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy,
+def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy | None,
                 instruction: str | None = None, budget: int = ACTION_BUDGET,
-                on_frame=None, timeout: float | None = None) -> EpisodeRun:
+                on_frame=None, timeout: float | None = None,
+                failed: str | None = None) -> EpisodeRun:
     """Evaluate `policy` on a compiled episode. `instruction` replaces the episode's (the
     empty and shuffled controls); `on_frame(stage)` is called after every recorded frame;
-    `timeout` limits each reset() and act() call to that many seconds."""
+    `timeout` limits each reset() and act() call to that many seconds. `failed`: the policy
+    failed elsewhere (e.g. its process died) for this reason; the episode is scored as it
+    stands at its start, without calling the policy (which may be None)."""
+    check_deadline(timeout)  # (a misuse, not the policy's failure)
     began = time.perf_counter()
-    error = None
-    try:  # first: a served policy may declare what it uses in its answer
-        with deadline(timeout):
-            policy.reset()
-    except Exception as failure:  # e.g. its server is gone: the episode is scored as it stands
-        error = f"reset: {_failure(failure)}"
+    error = failed
+    if error is None:
+        try:  # first: a served policy may declare what it uses in its answer
+            with deadline(timeout):
+                policy.reset()
+        except KeyboardInterrupt:
+            raise
+        except BaseException as failure:  # noqa: B036 (e.g. its server is gone, SystemExit)
+            error = f"reset: {_failure(failure)}"  # the episode is scored as it stands
+    uses = policy.uses if policy is not None else frozenset()
     scene = compiled.spec.scenes[episode["scene"]]
-    render = "images" in policy.uses or on_frame is not None
+    render = "images" in uses or on_frame is not None
     sim = stage.simulation(scene, episode["layout"], render=render)
     world = sim.reset(episode["seed"])
     recorder = Recorder(sim, {k: episode[k] for k in ("episode", "scene", "layout", "seed")})
@@ -81,7 +93,7 @@ def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy,
 
     record(robot.home_state())
     privileged = (Privileged(sim, world, scene, compiled.candidates(scene.id), episode["seed"])
-                  if "privileged" in policy.uses else None)
+                  if "privileged" in uses else None)
     text = episode["instruction"] if instruction is None else instruction
     steps = queries = clipped = 0
     while error is None and steps < budget:
@@ -91,8 +103,10 @@ def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy,
             with deadline(timeout):
                 answer = policy.act(seen)
             chunk, past = validate_actions(answer)
-        except Exception as failure:  # a policy bug ends its episode, not the evaluation
-            error = f"step {steps}: {_failure(failure)}"
+        except KeyboardInterrupt:
+            raise
+        except BaseException as failure:  # noqa: B036 (a policy bug or exit ends its episode,
+            error = f"step {steps}: {_failure(failure)}"  # not the evaluation)
             break
         executed = min(CHUNK_LIMIT, budget - steps, len(chunk))
         clipped += int(past[:executed].sum())
