@@ -121,7 +121,7 @@ MALFORMED = [
     (edit("cube half=0.02 color=red", "cube color=red"), "missing-attribute", 3, 12),
     (edit("cube half=0.02 color=red", "cube half=0.02 color=crimson"), "bad-value", 3, 42),
     (edit("rgb=(1, 0, 0)", "rgb=(1, 0)"), "bad-value", 3, 46),
-    (edit("rgb=(1, 0, 0)", "rgb=(2, 0, 0)"), "bad-value", 3, 46),
+    (edit("rgb=(1, 0, 0)", "rgb=(2, 0, 0)"), "bad-value", 3, 51),
     (edit("half=0.02 color=red", "half=-0.02 color=red"), "bad-value", 3, 31),
     (edit("mass=0.2 friction=0.1\n    object blue", "mass=0 friction=0.1\n    object blue"),
      "bad-value", 3, 65),

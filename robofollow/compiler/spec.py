@@ -11,10 +11,35 @@ from typing import Literal
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Step
 from robofollow.compiler.model import Model
+from robofollow.compiler.workspace import TABLE_SIZE
 
 BodyKind = Literal["cube", "slab", "cylinder", "sphere", "label", "bowl"]
 Level = Literal["L0", "L1", "L2", "L3"]
 LEVELS: tuple[Level, ...] = ("L0", "L1", "L2", "L3")
+
+# Limits on what a spec may say, checked when it is loaded (each value at its place in the
+# file): physical bounds keep every number something the simulator, the expert and the
+# cameras can handle; count limits keep a compile's time and memory bounded. Every number must
+# also be finite. Positions (points, `at`, `move`) must lie on the table top (workspace.py:
+# TABLE_SIZE, TABLE_CENTRE_Y); the loader then checks each body's footprint, with the jitter at
+# its extremes, against the table's edges and the other bodies.
+TABLE_HEIGHT_RANGE = (0.6, 0.9)  # m: the table top; the cameras are fixed (cam_high at 1.28 m)
+HALF_EXTENT_RANGE = (0.0005, 0.2)  # m: a half size, radius or half height (the table is 1.2 m)
+MASS_RANGE = (0.001, 10.0)  # kg: a ViperX lifts ~0.75 kg; heavier bodies can only be pushed
+FRICTION_RANGE = (0.001, 10.0)  # MuJoCo's sliding friction coefficient
+RGB_RANGE = (0.0, 1.0)  # each colour channel
+YAW_RANGE = (-360.0, 360.0)  # deg: a placement's final yaw (`expect place ... yaw 90`)
+JITTER_TABLE_FRACTION = 0.1  # a jitter bound is at most this fraction of the table's depth:
+MAX_JITTER = round(JITTER_TABLE_FRACTION * min(TABLE_SIZE[:2]), 9)  # m (7 cm; nearer bodies are
+#   kept apart by the overlap check with the jitter at its extremes)
+MAX_ROUNDS = 100  # `split ... rounds=`: rounds per test task
+MAX_TASKS = 1000  # `split ... max=`: test tasks kept per level
+MAX_SEED = 2_000_000_000  # `split ... seed=`: an episode's seed (seed + 100 x round + an
+#   offset below 1000, splits.episode_seed) stays below 2**31
+MAX_BODIES = 64  # objects and fixtures per scene
+MAX_LAYOUTS = 256  # layouts per scene (a layout may derive from another: `layout b from a`)
+MAX_STACK = 8  # bodies resting on (or in) one another, counting the one on the table
+MAX_SPEC_BYTES = 4 * 1024 * 1024  # bytes per .rf file
 
 
 class Source(Model):

@@ -6,14 +6,23 @@ without cascades: a body with a bad attribute is kept (with a stand-in value) so
 uses of its name still resolve, and `load_partial` says which layouts hold such a body or did
 not resolve, so that checks of the tasks on them (which would only repeat the problem) are
 skipped while every other task is checked in the same run.
+
+Every number is checked where it is written: finite and within the named limits of spec.py
+(positions on the table, sizes, masses, friction, colours, jitter, the table's height, yaw,
+rounds, caps and seeds), as are the counts of bodies, layouts and stacked bodies. Only regular
+files are read (a FIFO or device named *.rf is refused unopened), and a symbolic link found in
+a spec folder that points out of it is refused unfollowed. Nothing recurses on the depth of
+what a spec writes (derived layouts, stacks).
 """
 
 from __future__ import annotations
 
 import hashlib
 import math
+import os
+import stat
 from dataclasses import dataclass, field
-from functools import cache, lru_cache
+from functools import cache
 from pathlib import Path
 
 from lark import Lark, Token, Tree, UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
@@ -23,6 +32,20 @@ from robofollow.compiler.behaviour import Step
 from robofollow.compiler.observation import looks_alike
 from robofollow.compiler.parser import parse
 from robofollow.compiler.spec import (
+    FRICTION_RANGE,
+    HALF_EXTENT_RANGE,
+    MASS_RANGE,
+    MAX_BODIES,
+    MAX_JITTER,
+    MAX_LAYOUTS,
+    MAX_ROUNDS,
+    MAX_SEED,
+    MAX_SPEC_BYTES,
+    MAX_STACK,
+    MAX_TASKS,
+    RGB_RANGE,
+    TABLE_HEIGHT_RANGE,
+    YAW_RANGE,
     Body,
     Expected,
     Jitter,
@@ -52,14 +75,31 @@ _SIZES = {
 _COMMON = ("color", "rgb")
 _PHYSICS = ("mass", "friction")
 _SETTINGS = {"table_height": 0.74}
+_SETTING_RANGES = {"table_height": (TABLE_HEIGHT_RANGE, " m")}
+_SPLIT_NUMBERS = {  # attribute -> (SplitRule field, range)
+    "max": ("max_tasks", (1, MAX_TASKS)), "rounds": ("rounds", (1, MAX_ROUNDS)),
+    "seed": ("seed", (0, MAX_SEED))}
+
+# the lines of the spec files of the latest load (what errors found after loading show)
+_LINES: dict[str, tuple[str, ...]] = {}
 
 
-@lru_cache(maxsize=64)
+def _split_lines(text: str) -> list[str]:
+    """Lines as the spec parser counts them: split at '\n' only (a '\r' before it dropped)."""
+    return [line.removesuffix("\r") for line in text.split("\n")]
+
+
 def _file_lines(file: str) -> tuple[str, ...]:
+    if file in _LINES:
+        return _LINES[file]
     try:
-        return tuple(Path(file).read_text(encoding="utf-8").splitlines())
+        if not stat.S_ISREG(os.stat(file).st_mode):
+            return ()
+        with open(file, "rb") as source:
+            data = source.read(MAX_SPEC_BYTES)
     except OSError:
         return ()
+    return tuple(_split_lines(data.decode("utf-8", errors="replace")))
 
 
 def spec_error(code: str, message: str, where: Source, length: int = 1,
@@ -78,10 +118,67 @@ def _parser() -> Lark:
 
 def spec_files(paths: list[Path] | Path) -> list[Path]:
     """The .rf files named, or found below the folders named, in a stable order."""
-    files: list[Path] = []
+    return [path for path, _ in _found(paths)]
+
+
+def _found(paths: list[Path] | Path) -> list[tuple[Path, Path | None]]:
+    """(file, the folder it was found in, or None when it was named itself), in a stable
+    order. Finding opens nothing: what is found is checked before it is read."""
+    files: list[tuple[Path, Path | None]] = []
     for path in [paths] if isinstance(paths, Path) else paths:
-        files.extend(sorted(path.rglob(f"*{SPEC_SUFFIX}")) if path.is_dir() else [path])
+        if path.is_dir():
+            files.extend((file, path) for file in sorted(path.rglob(f"*{SPEC_SUFFIX}")))
+        else:
+            files.append((path, None))
     return files
+
+
+def _why_not_read(path: Path, folder: Path | None) -> str | None:
+    """Why a spec file is not to be read (None: a regular file). A link found in a folder must
+    stay inside it; its target is judged by its name and kind, never opened."""
+    try:
+        if folder is not None and path.is_symlink():
+            target = Path(os.path.realpath(path))
+            if not target.is_relative_to(Path(os.path.realpath(folder))):
+                return (f"a symbolic link that leads out of the spec folder {folder}; it is not "
+                        "followed (copy the file into the folder instead)")
+        info = os.stat(path)
+    except OSError as error:
+        return f"cannot read it: {error.strerror or error}"
+    if stat.S_ISDIR(info.st_mode):
+        return "a folder, not a spec file"
+    if not stat.S_ISREG(info.st_mode):
+        return "not a regular file (a FIFO, socket or device); it is not read"
+    if info.st_size > MAX_SPEC_BYTES:
+        return (f"{info.st_size} bytes, more than a spec file may hold ({MAX_SPEC_BYTES} "
+                "bytes)")
+    return None
+
+
+def _read(path: Path) -> bytes:
+    """The bytes of a regular file; opened without blocking, and checked again once open (the
+    file may have been replaced since it was looked at)."""
+    descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    with os.fdopen(descriptor, "rb") as source:
+        if not stat.S_ISREG(os.fstat(descriptor).st_mode):
+            raise OSError(f"{path} is not a regular file")
+        data = source.read(MAX_SPEC_BYTES + 1)
+    if len(data) > MAX_SPEC_BYTES:
+        raise OSError(f"more than a spec file may hold ({MAX_SPEC_BYTES} bytes)")
+    return data
+
+
+def _not_utf8(data: bytes, error: UnicodeDecodeError) -> tuple[int, int, str, str]:
+    """(line, column, the line as text, what is wrong) of the first byte that is not UTF-8."""
+    start = error.start
+    line_start = data.rfind(b"\n", 0, start) + 1
+    line_end = data.find(b"\n", start)
+    line = data.count(b"\n", 0, start) + 1
+    column = len(data[line_start:start].decode("utf-8")) + 1
+    shown = data[line_start:line_end if line_end >= 0 else len(data)].decode(
+        "utf-8", errors="replace").removesuffix("\r")
+    return line, column, shown, f"the file is not UTF-8 text: byte 0x{data[start]:02x} " \
+                                f"({error.reason})"
 
 
 @dataclass
@@ -97,7 +194,7 @@ class Loaded:
 
 def load_partial(paths: list[Path] | Path) -> Loaded:
     """Parse and validate spec files, going on past problems (see the module docstring)."""
-    return _Loader().load(spec_files(paths))
+    return _Loader().load(_found(paths))
 
 
 def load_spec(paths: list[Path] | Path) -> Spec:
@@ -135,23 +232,26 @@ class _Loader:
         return Source(file=self.file, line=token.line, column=token.column)
 
     # ---------------------------------------------------------------- files
-    def load(self, files: list[Path]) -> Loaded:
+    def load(self, files: list[tuple[Path, Path | None]]) -> Loaded:
         if not files:
             return Loaded(None, [SpecError("no-specs", "no .rf spec files found",
                                            file="<specs>", line=1, column=1)])
         digest = hashlib.sha256()
         scenes: dict[str, Scene] = {}
-        for path in files:
+        _LINES.clear()  # (only the files of the latest load are kept)
+        for path, folder in files:
             self.file = str(path)
-            try:
-                text = path.read_text(encoding="utf-8")
-            except (OSError, UnicodeDecodeError) as error:
-                self.errors.append(SpecError("unreadable", str(error), file=self.file, line=1,
-                                             column=1))
+            text = self.text(path, folder)
+            if text is None:
                 continue
             digest.update(path.name.encode() + b"\0" + text.encode() + b"\0")
-            self.lines[self.file] = text.splitlines()
+            self.lines[self.file] = _split_lines(text)
+            _LINES[self.file] = tuple(self.lines[self.file])
             tree = self.syntax(text)
+            if tree is not None and not tree.children:
+                self.error("empty-spec", "no scene in this file (a spec file holds one or more "
+                           "scene NAME \"title\" { ... } blocks)",
+                           Source(file=self.file, line=1, column=1))
             for node in tree.children if tree is not None else ():
                 name = node.children[0]
                 if name in self.scene_sources:
@@ -164,12 +264,33 @@ class _Loader:
                     scenes[scene.id] = scene
         return Loaded(Spec(scenes=scenes, digest=digest.hexdigest()), self.errors, self.suspect)
 
+    def text(self, path: Path, folder: Path | None) -> str | None:
+        """The file's text, or None when it is not read (the reason is an error at 1:1, or at
+        the first byte that is not UTF-8)."""
+        why = _why_not_read(path, folder)
+        data = None
+        if why is None:
+            try:
+                data = _read(path)
+            except OSError as error:
+                why = f"cannot read it: {error.strerror or error}"
+        if data is None:
+            self.errors.append(SpecError("unreadable", why, file=self.file, line=1, column=1))
+            return None
+        try:
+            return data.decode("utf-8")
+        except UnicodeDecodeError as error:
+            line, column, shown, message = _not_utf8(data, error)
+            self.errors.append(SpecError("encoding", message, file=self.file, line=line,
+                                         column=column, source_line=shown))
+            return None
+
     def syntax(self, text: str) -> Tree | None:
         try:
             return _parser().parse(text)
         except (UnexpectedEOF, UnexpectedToken) as error:
             if isinstance(error, UnexpectedEOF) or error.token.type == "$END":
-                lines = text.rstrip().splitlines() or [""]
+                lines = _split_lines(text.rstrip())
                 self.errors.append(SpecError(
                     "syntax", "the file ends too early" + _expected(error.expected),
                     file=self.file, line=len(lines), column=len(lines[-1]) + 1,
@@ -187,35 +308,45 @@ class _Loader:
     def scene(self, node: Tree) -> Scene | None:
         name, title, *items = node.children
         self.broken = set()
-        points: dict[str, tuple[float, float]] = {}
-        bodies: dict[str, Body] = {}
         settings = dict(_SETTINGS)
         by_kind: dict[str, list[Tree]] = {}
         for item in items:
             by_kind.setdefault(item.data, []).append(item)
-        for item in by_kind.get("point", []):
-            point, coordinates = item.children
-            if point in points:
-                self.error("duplicate-point", f"point {point!s} is defined twice", point)
-            points[str(point)] = _coordinates(coordinates)
+        points, bad_points = self.points(by_kind.get("point", []))
+        seen_settings: set[str] = set()
         for item in by_kind.get("setting", []):
-            self.setting(item, settings)
-        for item in by_kind.get("body", []):
+            self.setting(item, settings, seen_settings)
+        body_nodes, layout_nodes = by_kind.get("body", []), by_kind.get("layout", [])
+        bodies: dict[str, Body] = {}
+        for item in body_nodes:
             body = self.body(item)
-            if body.id in bodies:
+            if body.id in bodies:  # the first stands, and what uses the name is not checked
                 self.error("duplicate-object", f"{body.id!r} is defined twice", item.children[1])
+                self.broken.add(body.id)
+                continue
             bodies[body.id] = body
-        self.check_colours(bodies, by_kind.get("body", []))
-        jitter = {}
-        for item in by_kind.get("jitter", []):
-            target, attributes = item.children[0], item.children[1:]
-            if target != "*" and target not in bodies:
-                self.error("unknown-object", f"no object named {target!s}", target)
-            jitter[str(target)] = self.jitter(attributes)
+        # beyond a count limit the scene's layouts are not resolved (nor its tasks checked)
+        too_many = False
+        for nodes, limit, what, at in ((body_nodes, MAX_BODIES, "bodies", 1),
+                                       (layout_nodes, MAX_LAYOUTS, "layouts", 0)):
+            if len(nodes) > limit:  # reported at the first one beyond the limit
+                self.error(f"too-many-{what}", f"scene {name!s} declares {len(nodes)} {what}; "
+                           f"at most {limit} are allowed", nodes[limit].children[at])
+                too_many = True
+        if not too_many:  # (pairwise: not for a scene beyond the limit)
+            self.check_colours(bodies, body_nodes)
+        jitter = self.jitters(by_kind.get("jitter", []), bodies)
         table = settings["table_height"]
-        resolver = _LayoutResolver(self, bodies, points, table, jitter)
-        layouts = resolver.resolve(by_kind.get("layout", []))
-        defined = set(resolver.raw)  # a layout that failed to resolve is reported once, there
+        if too_many:
+            layouts: dict[str, Layout] = {}
+            defined = {str(item.children[0]) for item in layout_nodes}
+        else:
+            resolver = _LayoutResolver(self, bodies, points, bad_points, table, jitter)
+            layouts = resolver.resolve(layout_nodes)
+            defined = set(resolver.raw)  # a layout that failed to resolve is reported once, there
+        if not by_kind.get("task"):
+            self.error("no-tasks", f"scene {name!s} has no training tasks (write at least one "
+                       "task NAME on LAYOUT { \"instruction\" ... })", name)
         tasks = tuple(t for t in (self.task(item, str(name), bodies, defined)
                                   for item in by_kind.get("task", [])) if t is not None)
         tests = tuple(t for t in (self.test(item, str(name), bodies, defined)
@@ -232,28 +363,75 @@ class _Loader:
                      layouts=layouts, tasks=tasks, splits=splits, tests=tests,
                      table_height=table)
 
+    def points(self, items: list[Tree]) -> tuple[dict[str, tuple[float, float]], set[str]]:
+        """The named points, and those whose coordinates are bad (reported here, once: a layout
+        that uses one fails without a second report)."""
+        points: dict[str, tuple[float, float]] = {}
+        bad: set[str] = set()
+        for item in items:
+            point, coordinates = item.children
+            if point in points or point in bad:
+                self.error("duplicate-point", f"point {point!s} is defined twice", point)
+                continue
+            position = self.coordinates(coordinates, f"point {point!s}")
+            if position is None:
+                bad.add(str(point))
+            else:
+                points[str(point)] = position
+        return points, bad
+
+    def coordinates(self, node: Tree, what: str) -> tuple[float, float] | None:
+        """(x, y) as written, or None (reported at the number) when a coordinate is not finite
+        or the position is not on the table top."""
+        tokens = node.children
+        values = [float(token) for token in tokens]
+        for token, value, axis in zip(tokens, values, "xy", strict=True):
+            if not math.isfinite(value):
+                self.error("bad-value", f"{what}: {axis} = {_shown(token)} is not a finite "
+                           "number", token)
+                return None
+        low_x, high_x, low_y, high_y = table_bounds()
+        for token, value, low, high in zip(tokens, values, (low_x, low_y), (high_x, high_y),
+                                           strict=True):
+            if not low <= value <= high:
+                self.error("off-table", f"{what} at ({values[0]:g}, {values[1]:g}) can leave "
+                           f"the table: it is beyond the table top (x in [{low_x:g}, "
+                           f"{high_x:g}], y in [{low_y:g}, {high_y:g}])", token)
+                return None
+        return values[0], values[1]
+
     def check_colours(self, bodies: dict[str, Body], items: list[Tree]) -> None:
         """Bodies that look the same (kind, size, rgb) must not be told apart by colour words
         a camera cannot see."""
         tokens = {str(item.children[1]): item.children[1] for item in items}
         seen: list[Body] = []
         for body in bodies.values():
+            if body.id in self.broken:
+                continue
             twin = next((b for b in seen if looks_alike(b, body) and b.color != body.color), None)
-            if twin is not None and body.id not in self.broken:
+            if twin is not None:
                 self.error("colour-mismatch", f"{body.id} looks the same as {twin.id} (kind, "
                            f"size, rgb) but is called {body.color}, not {twin.color}",
                            tokens[body.id])
             seen.append(body)
 
-    def setting(self, item: Tree, settings: dict[str, float]) -> None:
+    def setting(self, item: Tree, settings: dict[str, float], seen: set[str]) -> None:
         name, value = item.children
         if name not in settings:
             self.error("unknown-setting", f"unknown setting {name!s} (known: "
                                           f"{', '.join(sorted(settings))})", name)
-        elif value.data != "number":
+            return
+        if name in seen:
+            self.error("duplicate-setting", f"{name!s} is set twice", name)
+            return
+        seen.add(str(name))
+        if value.data != "number":
             self.error("bad-value", f"{name!s} takes a number", name)
-        else:
-            settings[str(name)] = float(value.children[0])
+            return
+        bounds, unit = _SETTING_RANGES[str(name)]
+        number = self.checked(value.children[0], str(name), bounds, unit)
+        if number is not None:
+            settings[str(name)] = number
 
     def attributes(self, nodes: list[Tree], allowed: tuple[str, ...]) -> dict[str, Tree]:
         found: dict[str, Tree] = {}
@@ -268,43 +446,60 @@ class _Loader:
                 found[str(key)] = node
         return found
 
-    def number(self, node: Tree, low: float = -math.inf, high: float = math.inf) -> float | None:
-        value = node.children[1]
-        if value.data != "number":
-            self.error("bad-value", f"{node.children[0]!s} takes a number", node.children[0])
-            return None
-        number = float(value.children[0])
-        if not low <= number <= high:
-            self.error("bad-value", f"{node.children[0]!s} must be in [{low}, {high}]",
-                       value.children[0])
-            return None
-        return number
+    def checked(self, token: Token, what: str, bounds: tuple[float, float], unit: str = "",
+                whole: bool = False) -> float | None:
+        """The number written at `token`, or None (reported there) when it is not finite,
+        not within `bounds` or, for a count, not a whole number."""
+        value, (low, high) = float(token), bounds
+        if not math.isfinite(value):
+            self.error("bad-value", f"{what} = {_shown(token)} is not a finite number; it must "
+                       f"be in [{low:g}, {high:g}]{unit}", token)
+        elif not low <= value <= high:
+            self.error("bad-value", f"{what} = {_shown(token)} is out of range: it must be in "
+                       f"[{low:g}, {high:g}]{unit}", token)
+        elif whole and value != int(value):
+            self.error("bad-value", f"{what} = {_shown(token)} must be a whole number", token)
+        else:
+            return value
+        return None
 
-    def numbers(self, node: Tree, count: int | None, low=-math.inf, high=math.inf):
-        value = node.children[1]
-        items = value.children if value.data == "values" else [value]
-        numbers = [float(i.children[0]) for i in items if i.data == "number"]
-        if len(numbers) != len(items) or (count is not None and len(numbers) != count) or not all(
-                low <= n <= high for n in numbers):
-            size = f"{count} numbers" if count else "numbers"
-            self.error("bad-value", f"{node.children[0]!s} takes {size} in [{low}, {high}]",
-                       node.children[0])
+    def number(self, node: Tree, bounds: tuple[float, float], unit: str = "",
+               whole: bool = False) -> float | None:
+        """An attribute that takes one number (checked as `checked` does)."""
+        key, value = node.children
+        if value.data != "number":
+            self.error("bad-value", f"{key!s} takes a number", key)
             return None
-        return tuple(numbers)
+        return self.checked(value.children[0], str(key), bounds, unit, whole)
+
+    def numbers(self, node: Tree, count: int, bounds: tuple[float, float],
+                unit: str = "") -> tuple[float, ...] | None:
+        """An attribute that takes `count` numbers: (a, b, c)."""
+        key, value = node.children
+        items = value.children if value.data == "values" else [value]
+        if len(items) != count or any(i.data != "number" for i in items):
+            self.error("bad-value", f"{key!s} takes {count} numbers in [{bounds[0]:g}, "
+                       f"{bounds[1]:g}]{unit}: ({', '.join(['n'] * count)})", key)
+            return None
+        numbers = [self.checked(i.children[0], str(key), bounds, unit) for i in items]
+        return None if None in numbers else tuple(numbers)
 
     def body(self, item: Tree) -> Body:
         """The body as written; a bad or missing attribute is an error, and the body is kept
-        with a stand-in value (marked broken when the value could change what words mean)."""
+        with a stand-in value and marked broken (the checks of what rests on a stand-in would
+        only repeat the error)."""
         kind_node, name, kind, *attribute_nodes = item.children
         fixture = kind_node.children[0] == "fixture"
-        if kind not in _SIZES:
+        known = kind in _SIZES
+        if not known:
             self.error("unknown-kind", f"unknown kind {kind!s} (expected one of: "
                                        f"{', '.join(_SIZES)})", kind)
             self.broken.add(str(name))
-            kind = "cube"
-        allowed = _SIZES[str(kind)] + _COMMON + (() if fixture else _PHYSICS)
+        sizes = _SIZES[str(kind)] if known else tuple(dict.fromkeys(
+            a for names in _SIZES.values() for a in names))
+        allowed = sizes + _COMMON + (() if fixture else _PHYSICS)
         found = self.attributes(attribute_nodes, allowed)
-        missing = [a for a in allowed if a not in found]
+        missing = [a for a in allowed if a not in found and (known or a not in sizes)]
         if missing:
             self.error("missing-attribute", f"{name!s} needs {', '.join(missing)}", name)
         color = found["color"].children[1] if "color" in found else None
@@ -313,12 +508,14 @@ class _Loader:
             where = color.children[0] if color.data == "name" else found["color"].children[0]
             self.error("bad-value", f"color must be one of {', '.join(lf.Color.__args__)}", where)
             color = None
-        rgb = self.numbers(found["rgb"], 3, 0.0, 1.0) if "rgb" in found else None
-        half = self.size(str(kind), found)
-        physics = {key: self.number(found[key], 1e-6, 100.0) for key in _PHYSICS if key in found}
-        if color is None or half is None:
+        rgb = self.numbers(found["rgb"], 3, RGB_RANGE) if "rgb" in found else None
+        half = self.size(str(kind), found) if known else None
+        physics = {key: self.number(found[key], bounds, unit) for key, (bounds, unit) in
+                   (("mass", (MASS_RANGE, " kg")), ("friction", (FRICTION_RANGE, "")))
+                   if key in found}
+        if color is None or half is None or rgb is None or None in physics.values():
             self.broken.add(str(name))
-        return Body(id=str(name), kind=str(kind), fixture=fixture,
+        return Body(id=str(name), kind=str(kind) if known else "cube", fixture=fixture,
                     color=str(color.children[0]) if color is not None else "red",
                     rgb=rgb or (0.5, 0.5, 0.5), half_extents=half or (0.02, 0.02, 0.02),
                     **{key: value for key, value in physics.items() if value is not None})
@@ -328,25 +525,59 @@ class _Loader:
         if any(a not in found for a in _SIZES[kind]):
             return None
         if kind in ("slab", "label"):
-            return self.numbers(found["half"], 3, 0.0005, 1.0)
+            return self.numbers(found["half"], 3, HALF_EXTENT_RANGE, " m")
         if kind == "cube":
-            side = self.number(found["half"], 0.0005, 1.0)
+            side = self.number(found["half"], HALF_EXTENT_RANGE, " m")
             return None if side is None else (side, side, side)
-        radius = self.number(found["radius"], 0.0005, 1.0)
-        height = (self.number(found["half_height"], 0.0005, 1.0) if "half_height" in found
-                  else radius)
+        radius = self.number(found["radius"], HALF_EXTENT_RANGE, " m")
+        height = (self.number(found["half_height"], HALF_EXTENT_RANGE, " m")
+                  if "half_height" in found else radius)
         return None if radius is None or height is None else (radius, radius, height)
 
-    def jitter(self, attributes: list[Tree]) -> Jitter:
+    def jitters(self, items: list[Tree], bodies: dict[str, Body]) -> dict[str, Jitter]:
+        """Jitter by body ('*': the default). A bad range is reported once: it stands as no
+        jitter, and the bodies it applies to are marked broken."""
+        jitter: dict[str, Jitter] = {}
+        bad: set[str] = set()
+        for item in items:
+            target, attributes = item.children[0], item.children[1:]
+            if target in jitter or target in bad:
+                self.error("duplicate-jitter", f"the jitter of {target!s} is given twice",
+                           target)
+                continue
+            if target != "*" and target not in bodies:
+                self.error("unknown-object", f"no object named {target!s}", target)
+            ranges = self.jitter(attributes)
+            if ranges is None:
+                bad.add(str(target))
+            jitter[str(target)] = ranges or Jitter()
+        for body in bodies:
+            if body in bad or (body not in jitter and "*" in bad):
+                self.broken.add(body)
+        return jitter
+
+    def jitter(self, attributes: list[Tree]) -> Jitter | None:
         found = self.attributes(attributes, ("x", "y"))
         ranges = {}
+        ok = True
         for axis, node in found.items():
             value = node.children[1]
-            low, high = (float(t) for t in value.children) if value.data == "interval" else (1, 0)
-            if low > high:
-                self.error("bad-value", f"{axis} takes an interval [low, high]", node.children[0])
-            ranges[axis] = (low, high)
-        return Jitter(**ranges)
+            if value.data != "interval":
+                self.error("bad-value", f"{axis} takes an interval [low, high] (m)",
+                           node.children[0])
+                ok = False
+                continue
+            low, high = (self.checked(t, f"jitter {axis}", (-MAX_JITTER, MAX_JITTER), " m")
+                         for t in value.children)
+            if low is None or high is None:
+                ok = False
+            elif low > high:
+                self.error("bad-value", f"{axis} takes an interval [low, high] with low <= high",
+                           node.children[0])
+                ok = False
+            else:
+                ranges[axis] = (low, high)
+        return Jitter(**ranges) if ok else None
 
     # ---------------------------------------------------------------- tasks and splits
     def task(self, item: Tree, scene: str, bodies: dict[str, Body],
@@ -425,8 +656,9 @@ class _Loader:
                     self.error("unknown-object", f"no object named {token!s}", token)
             relation = next((str(t.children[0]) for t in rest
                              if isinstance(t, Tree) and t.data == "relation"), None)
-            yaw = next((float(t.children[0]) for t in rest
-                        if isinstance(t, Tree) and t.data == "yaw"), None)
+            yaw_node = next((t for t in rest if isinstance(t, Tree) and t.data == "yaw"), None)
+            yaw = None if yaw_node is None else self.checked(yaw_node.children[0], "yaw",
+                                                             YAW_RANGE, " degrees")
             target = str(rest[-1]) if child.data == "push" else (
                 str(names[1]) if child.data == "place" else None)
             steps.append(dict(action=child.data, arm=str(arm), source=str(source),
@@ -445,7 +677,11 @@ class _Loader:
             if key in found:
                 node = found[key].children[1]
                 names = node.children if node.data == "values" else [node]
-                tokens = [n.children[0] for n in names if n.data == "name"]
+                if any(n.data != "name" for n in names):
+                    self.error("bad-value", f"{key} takes names: {key}=(a, b, ...)",
+                               found[key].children[0])
+                    continue
+                tokens = [n.children[0] for n in names]
                 known = layouts if key == "layouts" else WORDINGS
                 for token in tokens:
                     if token not in known:
@@ -453,12 +689,18 @@ class _Loader:
                         self.error(code, f"unknown {key[:-1]} {token!s} (known: "
                                          f"{', '.join(sorted(known))})", token)
                 values[key] = tuple(str(t) for t in tokens)
-        for key, name in (("max", "max_tasks"), ("rounds", "rounds"), ("seed", "seed")):
+        for key, (name, bounds) in _SPLIT_NUMBERS.items():
             if key in found:
-                number = self.number(found[key], 0 if key == "seed" else 1, 1e9)
+                number = self.number(found[key], bounds, whole=True)
                 if number is not None:
                     values[name] = int(number)
         return SplitRule(**values)
+
+
+def _shown(token: Token) -> str:
+    """A number as written, shortened when it is long (as an overflow to infinity is)."""
+    return str(token) if len(token) <= 24 else f"{token[:12]}...{token[-6:]} ({len(token)} " \
+                                                "characters)"
 
 
 def _expected(terminals) -> str:
@@ -470,23 +712,23 @@ def _expected(terminals) -> str:
     return f" (expected: {', '.join(sorted(names)[:12])})" if names else ""
 
 
-def _coordinates(node: Tree) -> tuple[float, float]:
-    return float(node.children[0]), float(node.children[1])
-
-
 class _LayoutResolver:
-    """Layouts written as placements or as operations on another layout -> absolute poses."""
+    """Layouts written as placements or as operations on another layout -> absolute poses.
+    Iterative throughout: neither a long chain of derived layouts nor a stack recurses."""
 
     def __init__(self, loader: _Loader, bodies: dict[str, Body],
-                 points: dict[str, tuple[float, float]], table: float,
+                 points: dict[str, tuple[float, float]], bad_points: set[str], table: float,
                  jitter: dict[str, Jitter]):
         self.loader = loader
         self.jitter = jitter
         self.bodies = bodies
         self.points = points
+        self.bad_points = bad_points
         self.table = table
         self.raw: dict[str, Tree] = {}
         self.done: dict[str, dict[str, tuple] | None] = {}
+        self.reported: set[tuple] = set()  # geometry problems already reported (once each)
+        self.unposed: set[str] = set()  # layouts whose bodies could not be posed
 
     def resolve(self, nodes: list[Tree]) -> dict[str, Layout]:
         for node in nodes:
@@ -494,17 +736,30 @@ class _LayoutResolver:
             if name in self.raw:
                 self.loader.error("duplicate-layout", f"layout {name!s} is defined twice", name)
             self.raw[str(name)] = node
-        layouts = {}
-        for name, node in self.raw.items():
-            arrangement = self.arrangement(name, ())
-            if arrangement is None:
-                continue
-            placed = self.poses(arrangement, node.children[0])
-            if placed is not None:
-                base = node.children[1] if len(node.children) > 1 and isinstance(
-                    node.children[1], Token) else None
-                layouts[name] = Layout(name=name, base=str(base) if base else None, placed=placed)
-        return layouts
+        for name in self.raw:
+            self.arrangement(name)
+        posed: dict[str, Layout] = {}
+        for name in self.raw:
+            chain = []  # the layout and its bases not yet posed, posed bases first
+            current = name
+            while current is not None and current not in posed and current not in self.unposed \
+                    and self.done.get(current) is not None:
+                chain.append(current)
+                current = self.base(current)
+            for layout in reversed(chain):
+                base = self.base(layout)
+                # derived from a layout that could not be posed: fails quietly if it also fails
+                placed = self.poses(self.done[layout], self.raw[layout].children[0],
+                                    quiet=base in self.unposed)
+                if placed is None:
+                    self.unposed.add(layout)
+                else:
+                    posed[layout] = Layout(name=layout, base=base, placed=placed)
+        return {name: posed[name] for name in self.raw if name in posed}
+
+    def base(self, name: str) -> str | None:
+        rest = self.raw[name].children[1:]
+        return str(rest[0]) if rest and isinstance(rest[0], Token) else None
 
     def known(self, token: Token) -> bool:
         if token not in self.bodies:
@@ -512,123 +767,153 @@ class _LayoutResolver:
             return False
         return True
 
-    def position(self, node) -> tuple[float, float] | None:
+    def position(self, node, body: str) -> tuple[float, float] | None:
         if isinstance(node, Token):
+            if node in self.bad_points:  # already reported where the point is defined
+                return None
             if node not in self.points:
                 self.loader.error("unknown-point", f"no point named {node!s}", node)
                 return None
             return self.points[str(node)]
-        return _coordinates(node)
+        return self.loader.coordinates(node, body)
 
-    def arrangement(self, name: str, chain: tuple[str, ...]) -> dict[str, tuple] | None:
-        """body -> ("at", (x, y)) | ("on", body) | ("in", body), or None if it failed."""
-        if name in self.done:
-            return self.done[name]
-        node = self.raw[name]
-        if name in chain:
-            self.loader.error("layout-cycle", "layouts derive from each other: "
-                              + " -> ".join(chain[chain.index(name):] + (name,)),
-                              node.children[0])
-            self.done[name] = None
-            return None
-        rest = node.children[1:]
-        arrangement: dict[str, tuple] = {}
-        if rest and isinstance(rest[0], Token):
-            base, rest = rest[0], rest[1:]
-            if base not in self.raw:
-                self.loader.error("undefined-layout", f"no layout named {base!s}", base)
-                self.done[name] = None
-                return None
-            inherited = self.arrangement(str(base), chain + (name,))
-            if inherited is None:
-                self.done[name] = None
-                return None
-            arrangement = dict(inherited)
-        errors_before = len(self.loader.errors)
-        for op in rest:
-            self.apply(op, arrangement)
-        result = arrangement if len(self.loader.errors) == errors_before else None
-        self.done[name] = result
-        return result
+    def arrangement(self, name: str) -> dict[str, tuple] | None:
+        """body -> ("at", (x, y)) | ("on", body) | ("in", body), or None if it failed. The chain
+        of bases is followed down to a resolved layout (or a cycle, or an undefined base), then
+        resolved back up in a loop."""
+        chain: list[str] = []
+        current = name
+        while current not in self.done:
+            if current in chain:
+                cycle = chain[chain.index(current):] + [current]
+                self.loader.error("layout-cycle", "layouts derive from each other: "
+                                  + " -> ".join(cycle), self.raw[current].children[0])
+                return self.fail(chain)
+            chain.append(current)
+            rest = self.raw[current].children[1:]
+            if not (rest and isinstance(rest[0], Token)):
+                break  # written as placements
+            if rest[0] not in self.raw:
+                self.loader.error("undefined-layout", f"no layout named {rest[0]!s}", rest[0])
+                return self.fail(chain)
+            current = str(rest[0])
+        for layout in reversed(chain):
+            rest = self.raw[layout].children[1:]
+            arrangement: dict[str, tuple] = {}
+            if rest and isinstance(rest[0], Token):
+                inherited = self.done[str(rest[0])]
+                if inherited is None:
+                    return self.fail(chain)
+                arrangement, rest = dict(inherited), rest[1:]
+            applied = [self.apply(op, arrangement) for op in rest]  # every op, every error
+            self.done[layout] = arrangement if all(applied) else None
+        return self.done[name]
 
-    def apply(self, op: Tree, arrangement: dict[str, tuple]) -> None:
+    def fail(self, chain: list[str]) -> None:
+        for layout in chain:
+            self.done.setdefault(layout, None)
+        return None
+
+    def apply(self, op: Tree, arrangement: dict[str, tuple]) -> bool:
+        """Apply one operation; False (reported, or already reported) when it fails."""
         kind, args = op.data, op.children
         if not all(self.known(t) for t in args if isinstance(t, Token) and not (
                 kind in ("at", "move") and t is args[1])):
-            return
+            return False
         first = str(args[0])
         if kind in ("swap", "move", "remove", "put_on", "put_in") and first not in arrangement:
             self.loader.error("not-in-layout", f"{first} is not in this layout", args[0])
-            return
-        if kind == "at":
-            position = self.position(args[1])
-            if position is not None:
-                arrangement[first] = ("at", position)
-        elif kind == "move":
-            position = self.position(args[1])
-            if position is not None:
-                arrangement[first] = ("at", position)
+            return False
+        if kind in ("at", "move"):
+            position = self.position(args[1], first)
+            if position is None:
+                return False
+            arrangement[first] = ("at", position)
         elif kind in ("on", "put_on"):
             arrangement[first] = ("on", str(args[1]))
         elif kind in ("in_", "put_in"):
             if self.bodies[str(args[1])].kind != "bowl":
                 self.loader.error("not-a-container", f"{args[1]!s} is not a bowl", args[1])
-                return
+                return False
             arrangement[first] = ("in", str(args[1]))
         elif kind == "swap":
             second = str(args[1])
             if first == second:
                 self.loader.error("swap-self", f"swap names {first} twice", args[1])
-            elif second not in arrangement:
+                return False
+            if second not in arrangement:
                 self.loader.error("not-in-layout", f"{second} is not in this layout", args[1])
-            else:
-                arrangement[first], arrangement[second] = arrangement[second], arrangement[first]
+                return False
+            arrangement[first], arrangement[second] = arrangement[second], arrangement[first]
         elif kind == "remove":
             resting = [b for b, (how, where) in arrangement.items() if how != "at" and where == first]
             if resting:
                 self.loader.error("support-removed", f"{', '.join(resting)} rests on {first}",
                                   args[0])
-                return
+                return False
             del arrangement[first]
+        return True
 
-    def poses(self, arrangement: dict[str, tuple], where: Token) -> dict[str, Placed] | None:
+    def poses(self, arrangement: dict[str, tuple], where: Token,
+              quiet: bool = False) -> dict[str, Placed] | None:
+        """Every body's pose: a stack is walked down to the body on the table, then placed
+        upwards (a loop; at most MAX_STACK bodies high)."""
         placed: dict[str, Placed] = {}
-
-        def pose(body: str, chain: tuple[str, ...]) -> Placed | None:
-            if body in placed:
-                return placed[body]
-            how, value = arrangement[body]
-            half = self.bodies[body].half_extents[2]
-            if how == "at":
-                result = Placed(x=value[0], y=value[1], z=self.table + half)
-            elif value in chain or value == body:
-                self.loader.error("support-cycle", f"{body} and {value} rest on each other", where)
-                return None
-            elif value not in arrangement:
-                self.loader.error("not-in-layout", f"{body} rests on {value}, which is not in "
-                                                   "this layout", where)
-                return None
-            else:
-                support = pose(value, chain + (body,))
-                if support is None:
+        report = (lambda *_: None) if quiet else self.report
+        height: dict[str, int] = {}  # bodies from this one down to the table, itself included
+        for start in arrangement:
+            stack = [start]
+            while stack[-1] not in placed:
+                body = stack[-1]
+                how, value = arrangement[body]
+                if how == "at":
+                    break
+                if value in stack:
+                    report(("support-cycle", body, value), "support-cycle",
+                           f"{body} rests on itself" if value == body else
+                           f"{body} and {value} rest on each other", where)
                     return None
+                if value not in arrangement:
+                    report(("not-in-layout", body, value), "not-in-layout",
+                           f"{body} rests on {value}, which is not in this layout", where)
+                    return None
+                stack.append(value)
+            for body in reversed(stack):
+                if body in placed:
+                    continue
+                how, value = arrangement[body]
+                half = self.bodies[body].half_extents[2]
+                if how == "at":
+                    placed[body], height[body] = Placed(x=value[0], y=value[1],
+                                                        z=self.table + half), 1
+                    continue
+                height[body] = height[value] + 1
+                if height[body] > MAX_STACK:
+                    report(("stack-too-tall", body), "stack-too-tall", f"{body} rests on a "
+                           f"stack of {height[value]} bodies in layout {where!s}; at most "
+                           f"{MAX_STACK} bodies may rest on one another", where)
+                    return None
+                support = placed[value]
                 bottom = support.z - self.bodies[value].half_extents[2]
                 z = (support.z + self.bodies[value].half_extents[2] + half if how == "on"
                      else bottom + BOWL_FLOOR + half)
-                result = Placed(x=support.x, y=support.y, z=z, support=value, relation=how)
-            placed[body] = result
-            return result
-
-        for body in arrangement:
-            if pose(body, ()) is None:
-                return None
+                placed[body] = Placed(x=support.x, y=support.y, z=z, support=value, relation=how)
         self.check_overlaps(placed, where)
-        return placed
+        return placed  # in the order the recursive walk placed them: supports first
+
+    def report(self, key: tuple, code: str, message: str, where: Token) -> None:
+        """A problem of poses, reported at the first layout that has it (a derived layout
+        that keeps it does not repeat it, and fails, or is checked, without a second report)."""
+        if key not in self.reported:
+            self.reported.add(key)
+            self.loader.error(code, message, where)
 
     def check_overlaps(self, placed: dict[str, Placed], where: Token) -> None:
         """Bodies on the table stay on it and clear of each other with the jitter at its
-        extremes; nothing is stacked on a body that rolls."""
-        on_table = sorted(b for b, p in placed.items() if p.relation == "table")
+        extremes; nothing is stacked on a body that rolls. A broken body (a bad attribute,
+        reported there) is left out."""
+        broken = self.loader.broken
+        on_table = sorted(b for b, p in placed.items() if p.relation == "table" and b not in broken)
         ranges = {b: self.jitter.get(b) or self.jitter.get("*") or Jitter() for b in on_table}
         low_x, high_x, low_y, high_y = table_bounds()
         for body in on_table:
@@ -636,22 +921,26 @@ class _LayoutResolver:
             if (at.x + jitter.x[0] - half[0] < low_x or at.x + jitter.x[1] + half[0] > high_x
                     or at.y + jitter.y[0] - half[1] < low_y
                     or at.y + jitter.y[1] + half[1] > high_y):
-                self.loader.error("off-table", f"{body} at ({at.x:g}, {at.y:g}) can leave the "
-                                  f"table (x in [{low_x:g}, {high_x:g}], y in [{low_y:g}, "
-                                  f"{high_y:g}]) in layout {where!s}", where)
+                self.report(("off-table", body, at.x, at.y), "off-table",
+                            f"{body} at ({at.x:g}, {at.y:g}) can leave the table (x in "
+                            f"[{low_x:g}, {high_x:g}], y in [{low_y:g}, {high_y:g}]) in layout "
+                            f"{where!s}", where)
         solid = [b for b in on_table if self.bodies[b].kind != "label"]
         for i, a in enumerate(solid):
             for b in solid[i + 1:]:
                 pair = self.bodies[a], placed[a], self.bodies[b], placed[b]
+                key = ("overlap", a, placed[a].x, placed[a].y, b, placed[b].x, placed[b].y)
                 if _footprints_overlap(*pair, Jitter(), Jitter()):
-                    self.loader.error("overlap", f"{a} and {b} overlap in layout {where!s}", where)
+                    self.report(key, "overlap", f"{a} and {b} overlap in layout {where!s}", where)
                 elif _footprints_overlap(*pair, ranges[a], ranges[b]):
-                    self.loader.error("overlap", f"{a} and {b} can overlap in layout {where!s} "
-                                      "with the jitter at its extremes", where)
+                    self.report(key, "overlap", f"{a} and {b} can overlap in layout {where!s} "
+                                "with the jitter at its extremes", where)
         for body, at in placed.items():
-            if at.relation == "on" and self.bodies[at.support].kind == "sphere":
-                self.loader.error("unstable-stack", f"{body} cannot rest on {at.support}, a "
-                                  f"sphere, in layout {where!s}", where)
+            if at.relation == "on" and self.bodies[at.support].kind == "sphere" and not (
+                    {body, at.support} & broken):
+                self.report(("unstable-stack", body, at.support), "unstable-stack",
+                            f"{body} cannot rest on {at.support}, a sphere, in layout "
+                            f"{where!s}", where)
 
 
 def _footprints_overlap(a: Body, pa: Placed, b: Body, pb: Placed, ja: Jitter,

@@ -58,17 +58,22 @@ class World:
             self._pose(body, offsets)
 
     def _pose(self, body: str, offsets) -> Pose:
-        if body in self.poses:
-            return self.poses[body]
-        placed = self.layout.placed[body]
-        if placed.support is None:
-            dx, dy = offsets.get(body, (0.0, 0.0))
-            pose = Pose(placed.x + dx, placed.y + dy, placed.z)
-        else:  # a stacked or contained body follows its support
-            support = self._pose(placed.support, offsets)
-            pose = Pose(support.x, support.y, placed.z)
-        self.poses[body] = pose
-        return pose
+        """The body's pose; a stacked or contained body follows its support (walked down the
+        stack in a loop, however tall it is)."""
+        stack = [body]
+        while stack[-1] not in self.poses and self.layout.placed[stack[-1]].support is not None:
+            stack.append(self.layout.placed[stack[-1]].support)
+        for name in reversed(stack):
+            if name in self.poses:
+                continue
+            placed = self.layout.placed[name]
+            if placed.support is None:
+                dx, dy = offsets.get(name, (0.0, 0.0))
+                self.poses[name] = Pose(placed.x + dx, placed.y + dy, placed.z)
+            else:
+                support = self.poses[placed.support]
+                self.poses[name] = Pose(support.x, support.y, placed.z)
+        return self.poses[body]
 
     @property
     def movable(self) -> list[str]:
