@@ -78,8 +78,9 @@ def cmd_parse(args) -> int:
 
 
 def cmd_compile(args) -> int:
-    from robofollow.build import clean, compile_specs, summary, write
+    from robofollow.build import check_out, clean, compile_specs, summary, write
 
+    check_out(Path(args.out))  # before the work: an --out that cannot take the build is refused
     compiled = compile_specs(Path(args.specs))
     changed = write(compiled, Path(args.out))
     print(summary(compiled, changed), end="")
@@ -113,7 +114,11 @@ def cmd_audit(args) -> int:
 
     compiled = compile_specs(Path(args.specs))
     if args.export_tasks:
-        write_jsonl(Path(args.export_tasks), task_list(compiled.splits))
+        try:
+            write_jsonl(Path(args.export_tasks), task_list(compiled.splits))
+        except OSError as error:
+            raise RoboFollowError(f"cannot write {args.export_tasks}: "
+                                  f"{error.strerror or error}") from None
         print(f"wrote {len(compiled.splits.tasks)} test tasks to {args.export_tasks}",
               file=sys.stderr)
     report, listed = compiled.report, None
@@ -371,9 +376,10 @@ def cmd_dataset_check(args) -> int:
 
 def cmd_eval(args) -> int:
     from robofollow.build import compile_specs
-    from robofollow.eval.loading import is_server
+    from robofollow.eval.loading import is_server, with_privileged
     from robofollow.eval.report import write_report
-    from robofollow.eval.runner import EvalOptions, evaluate
+    from robofollow.eval.deadline import DEFAULT_POLICY_TIMEOUT
+    from robofollow.eval.runner import EvalOptions, evaluate, failures_text
     from robofollow.eval.tables import table_text
 
     compiled = compile_specs(Path(args.specs))
@@ -384,19 +390,30 @@ def cmd_eval(args) -> int:
     if args.policy_timeout is not None and is_server(args.policy):
         raise RoboFollowError("--policy-timeout limits in-process policies; a server takes "
                               "its own: --policy URL?timeout=S&retries=N")
-    options = EvalOptions(args.policy, tuple(scenes), tuple(levels), args.rounds,
+    policy = with_privileged(args.policy) if args.allow_privileged else args.policy
+    options = EvalOptions(policy, tuple(scenes), tuple(levels), args.rounds,
                           args.instruction_mode, args.video, compiled.spec.digest, tuple(tasks),
-                          args.sample, args.policy_timeout)
+                          args.sample, args.policy_timeout if args.policy_timeout is not None
+                          else None if is_server(args.policy) else DEFAULT_POLICY_TIMEOUT)
     try:
         result = evaluate(compiled, Path(args.out), options, args.workers, args.resume,
-                          progress=not args.quiet, executor=args.executor)
+                          progress=not args.quiet, executor=args.executor,
+                          drop_corrupt=args.drop_corrupt)
     except KeyboardInterrupt:
         return _interrupted("episodes", args.out)
-    markdown, _ = write_report(Path(args.out))
+    try:
+        markdown, _ = write_report(Path(args.out))
+    except OSError as error:
+        raise RoboFollowError(f"cannot write the report in {args.out}: "
+                              f"{error.strerror or error} (the results are kept; "
+                              f"robofollow report {args.out} writes it)") from None
     print(f"{args.policy} ({args.instruction_mode} instructions), {args.out}:")
     print(table_text(result))
+    failures = failures_text(result)
+    if failures:
+        print(failures)
     print(f"report: {markdown} (and .html)")
-    return 0
+    return 3 if failures else 0
 
 
 def cmd_report(args) -> int:
@@ -438,12 +455,17 @@ def _names(text: str | None, known: list[str], what: str) -> list[str]:
 
 def cmd_serve(args) -> int:
     from robofollow.build import compile_specs
+    import logging
+
+    from robofollow.eval.serving import ServerLimits
     from robofollow.eval.tcp import TcpPolicyServer
     from robofollow.eval.websocket import PolicyServer
 
     server_class, scheme = ((TcpPolicyServer, "tcp") if args.protocol == "tcp"
                             else (PolicyServer, "ws"))
-    server = server_class(compile_specs(Path(args.specs)), args.policy)
+    limits = ServerLimits(args.max_message, args.idle_timeout, args.max_clients)
+    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
+    server = server_class(compile_specs(Path(args.specs)), args.policy, limits)
 
     def listening(_) -> None:  # only now can a client connect
         print(f"serving {args.policy} on {scheme}://{args.host}:{args.port} (Ctrl-C stops)",
@@ -453,6 +475,8 @@ def cmd_serve(args) -> int:
         server.serve_forever(args.host, args.port, ready=listening)
     except KeyboardInterrupt:
         pass  # Ctrl-C is how a server is stopped
+    except OSError as error:  # e.g. the port is taken, or no such address here
+        raise RoboFollowError(f"cannot listen on {args.host}:{args.port}: {error}") from None
     return 0
 
 
@@ -576,7 +600,14 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="examples:\n  robofollow eval --policy expert --out runs/expert\n  robofollow "
                "eval --policy expert --out runs/quick --sample 2 --rounds 1\n  robofollow "
                "eval --policy blind --out runs/blind --levels L0,L1 --rounds 2\n  robofollow "
-               "eval --policy mypkg.policies:make --out runs/mine",
+               "eval --policy mypkg.policies:make --out runs/mine\n\n"
+               "A policy failure (an exception or SystemExit in the policy, invalid actions, a "
+               "call past\n--policy-timeout, a module:factory policy's process dying, a "
+               "server lost) ends its episode,\nwhich is scored as it stands and recorded "
+               "with the reason; the run goes on. A policy that\ncannot be built stops the "
+               "run before any episode.\n\nexit status: 0 the run finished; 3 it finished "
+               "and some episodes ended in a policy failure\n(counted in the summary); 1 an "
+               "error stopped it (finished episodes are kept: --resume);\n130 interrupted.",
         formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--policy", required=True,
                    help="expert, blind, noop, random, baseline:NAME (a shipped baseline), a "
@@ -606,9 +637,19 @@ def build_parser() -> argparse.ArgumentParser:
                    help="write mp4s of these episodes to RUN/videos (default: none)")
     p.add_argument("--policy-timeout", type=_seconds, metavar="S",
                    help="end an episode whose in-process policy takes longer than S seconds "
-                        "over a reset() or act() call, recording why (default: no limit; "
-                        "servers take ?timeout=S&retries=N)")
+                        "over a reset() or act() call, recording it as a policy failure "
+                        "(default: 60; servers take ?timeout=S&retries=N, default 60)")
+    p.add_argument("--allow-privileged", action="store_true",
+                   help="let a policy server (ws:// or tcp://) that asks for them have "
+                        "privileged observations: each episode's scene, layout and seed, from "
+                        "which it can rebuild the simulation's ground truth. Without it such a "
+                        "server is refused. Recorded in the run as ?privileged=1 on --policy; "
+                        "servers also take ?max_message=BYTES (largest reply, default 16 MiB)")
     p.add_argument("--resume", action="store_true", help="continue an interrupted run")
+    p.add_argument("--drop-corrupt", action="store_true",
+                   help="with --resume: move corrupt lines of RUN/episodes.jsonl (which stop a "
+                        "resume, with their line numbers) to RUN/episodes.jsonl.dropped and "
+                        "evaluate their episodes again")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
     p.set_defaults(handler=cmd_eval)
 
@@ -633,8 +674,19 @@ def build_parser() -> argparse.ArgumentParser:
                    help="wire protocol (default: websocket)")
     p.add_argument("--policy", required=True, help="expert, blind, noop, random, "
                    "baseline:NAME, a checkpoint folder, or module:factory")
-    p.add_argument("--host", default="0.0.0.0", help="address to listen on (default: 0.0.0.0)")
+    p.add_argument("--host", default="127.0.0.1",
+                   help="address to listen on (default: 127.0.0.1, this machine only; "
+                        "--host 0.0.0.0 exposes the server to every network this machine is "
+                        "on, without authentication: only on a network you trust)")
     p.add_argument("--port", type=_positive, default=8000, help="port (default: 8000)")
+    p.add_argument("--max-message", type=_positive, metavar="BYTES",
+                   help="refuse requests larger than this, closing the connection (default: "
+                        "16777216, 16 MiB; three 320x240 images take about 1 MiB)")
+    p.add_argument("--idle-timeout", type=_seconds, metavar="S",
+                   help="close a connection that sends nothing for S seconds (default: 300)")
+    p.add_argument("--max-clients", type=_positive, metavar="N",
+                   help="connections served at once, each with its own instance of the "
+                        "policy; more are refused (default: 8)")
     p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
     p.set_defaults(handler=cmd_serve)
 
@@ -783,7 +835,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.handler(args)
     except RoboFollowError as error:
-        print(error.render(), file=sys.stderr)
+        text = error.render()
+        if type(error).render is RoboFollowError.render:  # a plain message: say what it is
+            text = f"error: {text}"
+        print(text, file=sys.stderr)
         return 1
     except BrokenPipeError:  # output piped into e.g. `head`, which stopped reading
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115  (no flush error at exit)

@@ -45,7 +45,7 @@ def test_the_served_expert_scores_as_the_in_process_expert(stage):
     local = run_episode(benchmark(), stage, record, ExpertPolicy())
     uri, server = _start(PolicyServer(benchmark(), "expert").handle)
     try:
-        remote_policy = WebsocketPolicy(uri)
+        remote_policy = WebsocketPolicy(uri, privileged=True)
         assert remote_policy.uses == {"instruction", "privileged"}
         remote = run_episode(benchmark(), stage, record, remote_policy)
         remote_policy.close()

@@ -54,21 +54,35 @@ def load_policy(spec: str) -> Policy:
     return policy
 
 
+SERVER_SETTINGS = {"timeout": float, "retries": int, "max_message": int, "privileged": int}
+
+
 def _remote(spec: str) -> Policy:
-    """A policy server: `ws://` or `tcp://` HOST:PORT, optionally `?timeout=S&retries=N`
-    (seconds per call before a retry, default 60; retries after a time-out or a lost
-    connection, default 3)."""
+    """A policy server: `ws://` or `tcp://` HOST:PORT, optionally
+    `?timeout=S&retries=N&max_message=BYTES&privileged=1`: seconds per call before a retry
+    (default 60); retries after a time-out or a lost connection (default 3); the largest
+    message accepted from the server (default wire.MAX_MESSAGE_BYTES, 16 MiB); whether the
+    server may have privileged observations, each episode's scene, layout and seed (default 0:
+    a server that asks for them is refused; `robofollow eval --allow-privileged` adds it, and
+    the run's policy records it)."""
     address = urlsplit(spec)
     try:
-        settings = {key: float(value) if key == "timeout" else int(value)
-                    for key, value in parse_qsl(address.query,
-                                                strict_parsing=bool(address.query))}
+        pairs = parse_qsl(address.query, strict_parsing=bool(address.query))
+        settings = {key: SERVER_SETTINGS[key](value) for key, value in pairs
+                    if key in SERVER_SETTINGS}
         port = address.port
     except ValueError as error:
         raise PolicyLoadError(f"--policy {spec!r}: {error}") from None
-    if set(settings) - {"timeout", "retries"} or not address.hostname or port is None:
+    if ({key for key, _ in pairs} - set(SERVER_SETTINGS) or not address.hostname
+            or port is None):
         raise PolicyLoadError(f"--policy {spec!r}: expected {address.scheme}://HOST:PORT "
-                              "with optional ?timeout=SECONDS&retries=N")
+                              "with optional ?timeout=SECONDS&retries=N&max_message=BYTES"
+                              "&privileged=1")
+    if (settings.get("timeout", 1) <= 0 or settings.get("retries", 0) < 0
+            or settings.get("max_message", 1) < 1 or settings.get("privileged", 0) not in (0, 1)):
+        raise PolicyLoadError(f"--policy {spec!r}: timeout and max_message must be positive, "
+                              "retries at least 0, privileged 0 or 1")
+    settings["privileged"] = bool(settings.get("privileged", 0))
     if address.scheme == "tcp":
         from robofollow.eval.tcp import TcpPolicy
 
@@ -76,3 +90,15 @@ def _remote(spec: str) -> Policy:
     from robofollow.eval.websocket import WebsocketPolicy  # (it serves loaded policies)
 
     return WebsocketPolicy(f"{address.scheme}://{address.netloc}{address.path}", **settings)
+
+
+def with_privileged(spec: str) -> str:
+    """A server's --policy with privileged observations allowed (`?privileged=1`), as
+    `robofollow eval --allow-privileged` gives it: the run's options record it."""
+    if not is_server(spec):
+        raise PolicyLoadError(f"--allow-privileged is for policy servers (ws:// or tcp://); "
+                              f"{spec!r} runs in this process")
+    address = urlsplit(spec)
+    pairs = [(key, value) for key, value in parse_qsl(address.query) if key != "privileged"]
+    query = "&".join(f"{key}={value}" for key, value in [*pairs, ("privileged", "1")])
+    return address._replace(query=query).geturl()

@@ -54,18 +54,71 @@ class PolicyConnectionError(RoboFollowError):
     """A policy server could not be reached or did not answer, after the retries."""
 
 
+class PolicyServerError(RoboFollowError):
+    """A policy server answered with an error, or with what its protocol does not allow
+    (malformed metadata, bytes that are not a message, a message over the size limit)."""
+
+
+class PrivilegedRefusedError(PolicyServerError):
+    """A policy server asked for privileged observations that the user did not allow."""
+
+
 class BadActionError(RoboFollowError):
     """A policy returned something that is not a chunk of finite joint targets."""
+
+
+SERVER_TEXT_LIMIT = 500  # characters of a server's own text (errors, metadata) quoted
+
+
+def server_text(value) -> str:
+    """A server's text as it is quoted in errors and records: one line, cut short."""
+    text = " ".join(str(value).split())
+    return text if len(text) <= SERVER_TEXT_LIMIT else text[:SERVER_TEXT_LIMIT] + " [...]"
+
+
+def declared_uses(metadata, default: frozenset, server: str,
+                  allow_privileged: bool) -> frozenset:
+    """The observation parts a RoboFollow server declares in its metadata
+    ({"robofollow": {"uses": [part, ...]}}), or `default` for a server that declares none.
+    A server may ask for "privileged" (each episode's scene, layout and seed) only where the
+    user allowed it (`robofollow eval --allow-privileged`)."""
+    if not isinstance(metadata, dict) or "robofollow" not in metadata:
+        return default
+    own = metadata["robofollow"]
+    uses = own.get("uses") if isinstance(own, dict) else None
+    if not isinstance(uses, list | tuple) or not all(isinstance(p, str) for p in uses):
+        raise PolicyServerError(
+            f"the policy server at {server} sent malformed metadata: 'robofollow' must be a "
+            f"map whose 'uses' lists observation parts, got {server_text(repr(own))}")
+    unknown = sorted(set(uses) - OBSERVATION_PARTS)
+    if unknown:
+        raise PolicyServerError(
+            f"the policy server at {server} declares unknown observation parts "
+            f"{server_text(', '.join(unknown))} (known: {', '.join(sorted(OBSERVATION_PARTS))})")
+    if "privileged" in uses and not allow_privileged:
+        raise PrivilegedRefusedError(
+            f"the policy server at {server} asks for privileged observations (each episode's "
+            "scene, layout and seed, from which it can rebuild the simulation's ground truth); "
+            "they are sent only with `robofollow eval --allow-privileged` (the policy "
+            "URL's ?privileged=1), which the run records")
+    return frozenset(uses)
 
 
 def validate_actions(actions) -> tuple[np.ndarray, np.ndarray]:
     """The chunk as float64 [T, 14] targets clipped to the joint limits, with which actions
     had a target past a limit (learned policies overshoot limits their demonstrations touch);
-    BadActionError says what is wrong with a chunk that is not [T, 14] finite numbers."""
+    BadActionError says what is wrong with a chunk that is not [T, 14] finite real numbers
+    (strings, booleans, complex numbers and objects are refused, never converted)."""
     try:
-        chunk = np.asarray(actions, dtype=np.float64)
-    except (TypeError, ValueError) as error:
-        raise BadActionError(f"actions are not numbers: {error}") from None
+        chunk = np.asarray(actions)
+    except (TypeError, ValueError) as error:  # e.g. ragged nested lists
+        raise BadActionError(f"actions are not numbers: {server_text(error)}") from None
+    if chunk.dtype.kind not in "fiu":
+        kind = {"b": "booleans", "c": "complex numbers", "U": "strings", "S": "bytes",
+                "O": "objects"}.get(chunk.dtype.kind, f"dtype {chunk.dtype}")
+        raise BadActionError(f"actions are not numbers: got {kind} (expected real joint "
+                             "targets)")
+    chunk = chunk.astype(np.float64)
     if chunk.ndim == 1 and chunk.shape == (ACTION_WIDTH,):
         chunk = chunk[None]
     if chunk.ndim != 2 or chunk.shape[1] != ACTION_WIDTH or len(chunk) == 0:

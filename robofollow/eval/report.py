@@ -7,6 +7,7 @@ most common reasons, and links to failure videos."""
 from __future__ import annotations
 
 import json
+import re
 from collections import Counter, defaultdict
 from pathlib import Path
 
@@ -18,10 +19,15 @@ from robofollow.errors import RoboFollowError
 from robofollow.eval.runner import RESULTS, RUN_FILE, EvalOptions, read_results, summary
 from robofollow.oracle.metrics import METRICS, table
 
+# Every HTML template (`*.html.j2`) escapes what it shows: run records hold text from
+# policies and policy servers (error messages), which must never become markup. No template
+# marks a value |safe.
 _TEMPLATES = jinja2.Environment(
     loader=jinja2.PackageLoader("robofollow.eval", "templates"),
-    autoescape=jinja2.select_autoescape(["html"]), trim_blocks=True, lstrip_blocks=True,
-    undefined=jinja2.StrictUndefined)
+    autoescape=jinja2.select_autoescape(["html", "html.j2"], default_for_string=True,
+                                        default=False),
+    trim_blocks=True, lstrip_blocks=True, undefined=jinja2.StrictUndefined)
+VIDEO_LINK = re.compile(r"videos/[A-Za-z0-9_.#-]+\.mp4")  # what the runner writes
 DID = ("as instructed", "another training behaviour", "the other branch", "unrecognised")
 TOP = 15  # confusions and failure reasons listed
 
@@ -97,7 +103,8 @@ def report_data(name: str, options: EvalOptions, results: list[dict]) -> dict:
                           ).most_common(TOP),
         "clipped": {"actions": sum(r.get("clipped", 0) for r in results),
                     "episodes": sum(1 for r in results if r.get("clipped"))},
-        "videos": [(r["episode"], r["video"]) for r in results if r.get("video")][:50]}
+        "videos": [(r["episode"], r["video"]) for r in results
+                   if isinstance(r.get("video"), str) and VIDEO_LINK.fullmatch(r["video"])][:50]}
 
 
 def _group(results: list[dict], *keys: str) -> dict:

@@ -64,9 +64,6 @@ _RECORD_FIELDS = {"episode": str, "scene": str, "level": str, "task": str,
 class EvalRunError(RoboFollowError):
     """The run folder cannot be used as asked (or the run cannot go on)."""
 
-    def render(self) -> str:
-        return f"error: {self}"
-
 
 class EvalOutputError(EvalRunError):
     """An output path that cannot be written."""

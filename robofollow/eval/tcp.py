@@ -8,31 +8,59 @@ observation is {"observation": {"head_camera": {"rgb"}, "left_camera": {"rgb"},
 "right_camera": {"rgb"}} (uint8 H x W x 3), "joint_action": {"vector"} (14), "instruction"};
 its reply is the [T, 14] absolute joint targets.
 
-`robofollow serve --protocol tcp` puts a Python policy behind this protocol. Extensions only
-between RoboFollow ends: the server answers reset with {"robofollow": {version, uses}} (upstream
-servers answer None), and then the client sends only the parts the policy uses, with
-"privileged" = {scene, layout, seed} in a reference policy's predict observations.
+`robofollow serve --protocol tcp` puts a Python policy behind this protocol, each connection
+in its own thread with its own policy instance. Its error replies carry the error's message;
+"traceback" says only that the traceback is in the server's log. A message over the receiving
+end's limit (`robofollow.eval.wire.MAX_MESSAGE_BYTES` unless configured) is refused unread: the
+server answers with an error and closes the connection, the client fails the call.
+
+Extensions only between RoboFollow ends: the server answers reset with {"robofollow":
+{version, uses}} (upstream servers answer None), and then the client sends only the parts the
+policy uses, with "privileged" = {scene, layout, seed} in a reference policy's predict
+observations where the user allowed it (`robofollow eval --allow-privileged`).
 """
 
 from __future__ import annotations
 
 import base64
+import binascii
 import json
 import socket
 import struct
-import traceback
+import threading
+import time
 
 import numpy as np
 
 from robofollow.build import Compiled
-from robofollow.errors import RoboFollowError
-from robofollow.eval.policy import OBSERVATION_PARTS, PolicyConnectionError
-from robofollow.eval.serving import ServedPolicy, privileged_message
+from robofollow.eval.policy import (
+    PolicyConnectionError,
+    PolicyServerError,
+    declared_uses,
+    server_text,
+)
+from robofollow.eval.serving import (
+    DEFAULT_HOST,
+    PolicyPool,
+    RequestError,
+    ServerBusyError,
+    ServerLimits,
+    error_reply,
+    log,
+    privileged_message,
+)
+from robofollow.eval.wire import (
+    MAX_MESSAGE_BYTES,
+    MessageTooBig,
+    WireError,
+    size_text,
+    wire_array,
+)
 
-MAX_MESSAGE = 128 * 2 ** 20  # bytes
 UPSTREAM_USES = frozenset({"state", "instruction", "images"})
 CAMERAS = {"cam_high": "head_camera", "cam_left_wrist": "left_camera",
            "cam_right_wrist": "right_camera"}
+TRACEBACK_NOTE = "not sent; see the server's log"
 
 
 def encode(value):
@@ -53,8 +81,11 @@ def encode(value):
 def decode(value):
     if isinstance(value, dict):
         if value.get("__numpy_array__"):
-            data = base64.b64decode(value["data"])
-            return np.frombuffer(data, dtype=np.dtype(value["dtype"])).reshape(value["shape"])
+            try:
+                data = base64.b64decode(value.get("data"), validate=True)
+            except (TypeError, ValueError, binascii.Error):
+                raise WireError("an array's data is not base64") from None
+            return wire_array(data, value.get("dtype"), value.get("shape"))
         return {key: decode(item) for key, item in value.items()}
     if isinstance(value, list):
         return [decode(item) for item in value]
@@ -66,9 +97,14 @@ def send_message(connection: socket.socket, message) -> None:
     connection.sendall(struct.pack(">I", len(payload)) + payload)
 
 
-def _receive_exactly(connection: socket.socket, size: int) -> bytes:
+def _receive_exactly(connection: socket.socket, size: int, deadline: float | None) -> bytes:
     chunks, left = [], size
     while left:
+        if deadline is not None:  # the whole message within the time-out, not each piece
+            remaining = deadline - time.monotonic()
+            if remaining <= 0:
+                raise TimeoutError("the rest of the message did not arrive in time")
+            connection.settimeout(remaining)
         chunk = connection.recv(min(left, 2 ** 20))
         if not chunk:
             raise ConnectionError("the connection closed mid-message")
@@ -77,23 +113,47 @@ def _receive_exactly(connection: socket.socket, size: int) -> bytes:
     return b"".join(chunks)
 
 
-def receive_message(connection: socket.socket):
-    (size,) = struct.unpack(">I", _receive_exactly(connection, 4))
-    if size > MAX_MESSAGE:
-        raise ConnectionError(f"a message of {size} bytes is over the {MAX_MESSAGE} limit")
-    return decode(json.loads(_receive_exactly(connection, size).decode("utf-8")))
+def receive_message(connection: socket.socket, max_size: int = MAX_MESSAGE_BYTES):
+    """The next message. MessageTooBig: its length is over `max_size` (nothing of it is read;
+    the connection is then out of step and must be closed). WireError: not JSON of the
+    protocol. A connection with a time-out must deliver a message's rest within it."""
+    timeout = connection.gettimeout()
+    header = _receive_exactly(connection, 4, None)
+    (size,) = struct.unpack(">I", header)
+    if size > max_size:
+        raise MessageTooBig(f"a message of {size_text(size)} is over the limit of "
+                            f"{size_text(max_size)} (its first bytes: {header!r})")
+    try:
+        payload = _receive_exactly(
+            connection, size, None if timeout is None else time.monotonic() + timeout)
+    finally:
+        connection.settimeout(timeout)
+    try:
+        return decode(json.loads(payload.decode("utf-8")))
+    except WireError:
+        raise
+    except (ValueError, RecursionError) as error:  # not UTF-8 / JSON, or nested too deep
+        raise WireError(f"not JSON: {type(error).__name__}: {server_text(error)}") from None
 
 
 class TcpPolicy:
     """A policy served by upstream's TCP protocol. `reset` is retried after a lost
     connection (as upstream's client does); a lost `predict` is retried once the connection
-    is back, up to `retries` times."""
+    is back, up to `retries` times. Replies over `max_message` bytes or not of the protocol
+    fail the call at once. `privileged`: whether a server may ask for privileged
+    observations."""
 
-    def __init__(self, host: str, port: int, timeout: float = 60.0, retries: int = 3):
+    def __init__(self, host: str, port: int, timeout: float = 60.0, retries: int = 3,
+                 max_message: int = MAX_MESSAGE_BYTES, privileged: bool = False):
         self.address, self.timeout, self.retries = (host, port), timeout, retries
+        self.max_message, self.allow_privileged = max_message, privileged
         self.uses = UPSTREAM_USES
         self.connection: socket.socket | None = None
         self.instruction: str | None = None
+
+    @property
+    def uri(self) -> str:
+        return f"tcp://{self.address[0]}:{self.address[1]}"
 
     def _call(self, cmd: str, obs=None):
         for attempt in range(self.retries + 1):
@@ -102,23 +162,41 @@ class TcpPolicy:
                     self.connection = socket.create_connection(self.address, self.timeout)
                     self.connection.settimeout(self.timeout)
                 send_message(self.connection, {"cmd": cmd, "obs": obs})
-                reply = receive_message(self.connection)
+                reply = receive_message(self.connection, self.max_message)
                 break
-            except (OSError, ConnectionError) as error:
+            except MessageTooBig as error:  # retrying would bring the same reply
+                self.close()
+                raise PolicyServerError(f"the policy server at {self.uri} answered {cmd!r} "
+                                        f"with {error} (raise it with "
+                                        "?max_message=BYTES)") from None
+            except WireError as error:
+                self.close()
+                raise PolicyServerError(f"the policy server at {self.uri} answered {cmd!r} "
+                                        "with a message that is not upstream's protocol: "
+                                        f"{error}") from None
+            except OSError as error:  # (ConnectionError and time-outs included)
                 self.close()
                 if attempt == self.retries:
                     raise PolicyConnectionError(
-                        f"the policy server at tcp://{self.address[0]}:{self.address[1]} did "
-                        f"not answer {cmd!r} after {self.retries + 1} tries: {error}") from None
+                        f"the policy server at {self.uri} did not answer {cmd!r} after "
+                        f"{self.retries + 1} tries: {error}") from None
+        if not isinstance(reply, dict) or not ({"res", "error"} & set(reply)):
+            self.close()
+            raise PolicyServerError(f"the policy server at {self.uri} answered {cmd!r} with "
+                                    f"{server_text(repr(reply))}, not {{'res': ...}} or "
+                                    "{'error': ...}")
         if "error" in reply:
-            raise RoboFollowError(f"the policy server failed on {cmd!r}: {reply['error']}")
-        return reply.get("res")
+            raise PolicyServerError(f"the policy server failed on {cmd!r}: "
+                                    f"{server_text(reply['error'])}")
+        return reply["res"]
 
     def reset(self) -> None:
         reply = self._call("reset")
-        declared = reply.get("robofollow", {}).get("uses") if isinstance(reply, dict) else None
-        self.uses = (frozenset(declared) & OBSERVATION_PARTS if declared is not None
-                     else UPSTREAM_USES)
+        try:
+            self.uses = declared_uses(reply, UPSTREAM_USES, self.uri, self.allow_privileged)
+        except PolicyServerError:
+            self.close()
+            raise
         self.instruction = None
 
     def act(self, observation: dict) -> np.ndarray:
@@ -129,9 +207,9 @@ class TcpPolicy:
                                for name, image in observation.get("images", {}).items()},
                "joint_action": {"vector": np.asarray(observation["state"], dtype=np.float64)},
                "instruction": observation["instruction"]}
-        if "privileged" in observation:
+        if "privileged" in observation and self.allow_privileged:
             obs["privileged"] = privileged_message(observation["privileged"])
-        return np.asarray(self._call("predict", obs))
+        return self._call("predict", obs)  # checked by the episode (validate_actions)
 
     def close(self) -> None:
         if self.connection is not None:
@@ -139,50 +217,143 @@ class TcpPolicy:
             self.connection = None
 
 
-class TcpPolicyServer:
-    """Serves one Python policy over upstream's TCP protocol, one connection at a time."""
+def _drain(connection: socket.socket, limit: int = 2 ** 20, seconds: float = 1.0) -> None:
+    """Close our side, then read (and drop) what the client still sends for a moment, so
+    that the reply just sent is not lost to a reset of a connection with unread data."""
+    try:
+        connection.shutdown(socket.SHUT_WR)
+        connection.settimeout(seconds)
+        deadline, read = time.monotonic() + seconds, 0
+        while read < limit and time.monotonic() < deadline:
+            chunk = connection.recv(65536)
+            if not chunk:
+                return
+            read += len(chunk)
+    except OSError:
+        pass
 
-    def __init__(self, compiled: Compiled, policy_spec: str):
-        self.served = ServedPolicy(compiled, policy_spec)
-        self.instruction = ""
 
-    def handle(self, connection: socket.socket) -> None:
-        with connection:
-            while True:
-                try:
-                    request = receive_message(connection)
-                except (OSError, ConnectionError, ValueError):  # closed, or not this protocol
-                    return
-                try:
-                    reply = {"res": self._answer(request)}
-                except Exception as error:  # the client gets the message and the traceback
-                    reply = {"error": f"{type(error).__name__}: {error}",
-                             "traceback": traceback.format_exc()}
-                send_message(connection, reply)
+class _Session:
+    """One connection's state: its policy instance and the instruction last set."""
 
-    def _answer(self, request: dict):
+    def __init__(self, pool: PolicyPool):
+        self.pool, self.served, self.instruction = pool, None, ""
+
+    def answer(self, request):
+        if not isinstance(request, dict):
+            raise RequestError("a request must be {'cmd': ..., 'obs': ...}")
         command, obs = request.get("cmd"), request.get("obs")
+        if command not in ("reset", "set_instruction", "predict"):
+            raise RequestError(f"unknown command {server_text(repr(command))} (expected reset, "
+                               "set_instruction or predict)")
+        if self.served is None:
+            self.served = self.pool.acquire()
         if command == "reset":
             self.served.reset()
             self.instruction = ""
             return self.served.metadata
         if command == "set_instruction":
+            if not isinstance(obs, str):
+                raise RequestError("set_instruction's obs must be the instruction string")
             self.instruction = obs
             return None
-        if command == "predict":
-            cameras = obs.get("observation", {})
-            images = {name: cameras[key]["rgb"] for name, key in CAMERAS.items()
-                      if key in cameras} or None
-            return self.served.act(obs["joint_action"]["vector"],
-                                   obs.get("instruction", self.instruction), images,
-                                   obs.get("privileged"))
-        raise ValueError(f"unknown command {command!r} (expected reset, set_instruction or "
-                         "predict)")
+        if not isinstance(obs, dict) or not isinstance(obs.get("joint_action"), dict):
+            raise RequestError("predict's obs must be {'observation', 'joint_action': "
+                               "{'vector'}, 'instruction'}")
+        cameras = obs.get("observation") or {}
+        if not isinstance(cameras, dict) or not all(
+                isinstance(cameras[key], dict) and isinstance(cameras[key].get("rgb"),
+                                                              np.ndarray)
+                for key in CAMERAS.values() if key in cameras):
+            raise RequestError("predict's 'observation' must map cameras to {'rgb': array}")
+        images = {name: cameras[key]["rgb"] for name, key in CAMERAS.items()
+                  if key in cameras} or None
+        return self.served.act(obs["joint_action"].get("vector"),
+                               obs.get("instruction", self.instruction), images,
+                               obs.get("privileged"))
 
-    def serve_forever(self, host: str, port: int, ready=None) -> None:
+    def close(self) -> None:
+        if self.served is not None:
+            self.pool.release(self.served)
+            self.served = None
+
+
+class TcpPolicyServer:
+    """Serves one Python policy over upstream's TCP protocol, each connection in a thread."""
+
+    def __init__(self, compiled: Compiled, policy_spec: str,
+                 limits: ServerLimits | None = None):
+        self.limits = limits or ServerLimits()
+        self.pool = PolicyPool(compiled, policy_spec, self.limits.max_clients)
+        self.stopped = threading.Event()
+        self.slots = threading.BoundedSemaphore(self.limits.max_clients)
+
+    def handle(self, connection: socket.socket, peer="client") -> None:
+        """Answer one connection's requests until it closes, idles past the time-out, sends
+        a message over the limit or bytes that are not the protocol."""
+        session = _Session(self.pool)
+        with connection:
+            connection.settimeout(self.limits.idle_timeout)
+            try:
+                while not self.stopped.is_set():
+                    try:
+                        request = receive_message(connection, self.limits.max_message)
+                    except (MessageTooBig, WireError) as error:  # refused, then closed
+                        log.warning("%s: %s", peer, error)
+                        send_message(connection, {"error": f"{type(error).__name__}: {error}",
+                                                  "traceback": TRACEBACK_NOTE})
+                        _drain(connection)
+                        return
+                    try:
+                        reply = {"res": session.answer(request)}
+                    except Exception as error:  # the message only; the traceback is logged
+                        reply = {"error": error_reply(error, str(peer)),
+                                 "traceback": TRACEBACK_NOTE}
+                    try:
+                        send_message(connection, reply)
+                    except (TypeError, ValueError) as error:  # a reply JSON cannot carry
+                        send_message(connection, {"error": error_reply(error, str(peer)),
+                                                  "traceback": TRACEBACK_NOTE})
+            except OSError:  # closed, reset, or idle past the time-out
+                return
+            except Exception:  # never the server: only this connection ends
+                log.exception("%s: connection failed", peer)
+            finally:
+                session.close()
+
+    def serve_forever(self, host: str = DEFAULT_HOST, port: int = 0, ready=None) -> None:
         with socket.create_server((host, port)) as listener:
+            listener.settimeout(0.5)  # to notice shutdown()
             if ready is not None:
                 ready(listener)
-            while True:
-                connection, _ = listener.accept()
-                self.handle(connection)
+            while not self.stopped.is_set():
+                try:
+                    connection, peer = listener.accept()
+                except TimeoutError:
+                    continue
+                if not self.slots.acquire(blocking=False):  # refused, not queued
+                    self._refuse(connection, peer)
+                    continue
+                threading.Thread(target=self._serve_one, args=(connection, peer), daemon=True,
+                                 name=f"robofollow-tcp-{peer}").start()
+
+    def _serve_one(self, connection: socket.socket, peer) -> None:
+        try:
+            self.handle(connection, peer)
+        finally:
+            self.slots.release()
+
+    def _refuse(self, connection: socket.socket, peer) -> None:
+        with connection:
+            error = ServerBusyError(f"the server is serving its limit of "
+                                    f"{self.limits.max_clients} clients; try again later")
+            try:
+                connection.settimeout(1.0)
+                send_message(connection, {"error": error_reply(error, str(peer)),
+                                          "traceback": TRACEBACK_NOTE})
+            except OSError:
+                pass
+
+    def shutdown(self) -> None:
+        """Stop accepting; open connections end at their next message."""
+        self.stopped.set()

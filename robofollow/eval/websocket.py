@@ -5,78 +5,159 @@ Protocol (openpi's): on connect the server sends its metadata (a msgpack map); t
 client message is an observation and each reply a map with "actions" ([H, 14]). Messages are
 msgpack with numpy arrays (robofollow.eval.wire). Observations follow openpi's ALOHA
 convention: "state" (float32 [14]), "images" {cam_high, cam_left_wrist, cam_right_wrist} as
-uint8 [3, H, W], "prompt" (the instruction). A server that fails sends its traceback as a text
-message and closes.
+uint8 [3, H, W], "prompt" (the instruction). A server that fails sends a text message and
+closes; `robofollow serve` sends the error's type and message only (the traceback goes to its
+log). Either end closes the connection (code 1009) on a message over its size limit
+(`robofollow.eval.wire.MAX_MESSAGE_BYTES` unless configured); the client then fails the call
+with the reason, without retrying.
 
 Extensions only between RoboFollow ends (an openpi server never sees them): a server whose
 metadata carries "robofollow" accepts {"reset": true} at an episode start, declares the
 observation parts its policy uses, and for a privileged (reference) policy receives
-"privileged" = {scene, layout, seed}, from which it rebuilds the same start state itself.
+"privileged" = {scene, layout, seed}, from which it rebuilds the same start state itself,
+where the user allowed it (`robofollow eval --allow-privileged`).
 """
 
 from __future__ import annotations
 
-import traceback
 from contextlib import ExitStack
 
 import numpy as np
-from websockets.exceptions import ConnectionClosed
+from websockets.exceptions import ConnectionClosed, InvalidURI, WebSocketException
+from websockets.frames import CloseCode
 from websockets.sync.client import connect
 from websockets.sync.server import serve
 
 from robofollow.build import Compiled
-from robofollow.errors import RoboFollowError
-from robofollow.eval.policy import OBSERVATION_PARTS, PolicyConnectionError
-from robofollow.eval.serving import ServedPolicy, privileged_message
-from robofollow.eval.wire import packb, unpackb
+from robofollow.eval.policy import (
+    PolicyConnectionError,
+    PolicyServerError,
+    declared_uses,
+    server_text,
+)
+from robofollow.eval.serving import (
+    DEFAULT_HOST,
+    PolicyPool,
+    RequestError,
+    ServerLimits,
+    error_reply,
+    log,
+    privileged_message,
+)
+from robofollow.eval.wire import MAX_MESSAGE_BYTES, WireError, packb, size_text, unpackb
 from robofollow.sim.cameras import CAMERA_NAMES
 
 OPENPI_USES = frozenset({"state", "instruction", "images"})
 
 
-class WebsocketPolicy:
-    """A policy served over the openpi websocket protocol (`ws://host:port`)."""
+def _too_big(error: ConnectionClosed) -> str | None:
+    """Which end refused a message as too big, if that is why the connection closed: "rcvd"
+    (the peer closed first, with 1009, and this end echoed it) or "sent" (this end did)."""
+    too_big = CloseCode.MESSAGE_TOO_BIG
+    if error.rcvd is not None and error.rcvd.code == too_big and (
+            error.sent is None or error.rcvd_then_sent):
+        return "rcvd"
+    if error.sent is not None and error.sent.code == too_big:
+        return "sent"
+    return None
 
-    def __init__(self, uri: str, timeout: float = 60.0, retries: int = 3):
+
+class WebsocketPolicy:
+    """A policy served over the openpi websocket protocol (`ws://host:port`). Messages over
+    `max_message` bytes are refused; `privileged`: whether the server may ask for privileged
+    observations."""
+
+    def __init__(self, uri: str, timeout: float = 60.0, retries: int = 3,
+                 max_message: int = MAX_MESSAGE_BYTES, privileged: bool = False):
         self.uri, self.timeout, self.retries = uri, timeout, retries
+        self.max_message, self.allow_privileged = max_message, privileged
         self.connection = None
         self.metadata = self._connect()
-        declared = self.metadata.get("robofollow", {}).get("uses")
-        self.uses = (frozenset(declared) & OBSERVATION_PARTS if declared is not None
-                     else OPENPI_USES)
+        try:
+            self.uses = declared_uses(self.metadata, OPENPI_USES, uri, privileged)
+        except PolicyServerError:
+            self.close()
+            raise
 
     def _connect(self) -> dict:
         self.close()
+        self.exits = ExitStack()
         try:
-            self.exits = ExitStack()
             self.connection = self.exits.enter_context(connect(
-                self.uri, compression=None, max_size=None, open_timeout=self.timeout))
-            metadata = unpackb(self.connection.recv(timeout=self.timeout))
-        except (OSError, TimeoutError, ConnectionClosed) as error:
+                self.uri, compression=None, max_size=self.max_message,
+                open_timeout=self.timeout))
+            data = self.connection.recv(timeout=self.timeout)
+        except ConnectionClosed as error:
+            self.close()
+            if _too_big(error):
+                raise PolicyServerError(self._too_big_text(error, "its metadata")) from None
             raise PolicyConnectionError(f"cannot reach the policy server at {self.uri}: "
                                         f"{error}") from None
-        return metadata if isinstance(metadata, dict) else {}
+        except (OSError, TimeoutError, InvalidURI, WebSocketException) as error:
+            self.close()
+            raise PolicyConnectionError(f"cannot reach the policy server at {self.uri}: "
+                                        f"{type(error).__name__}: {error}") from None
+        if isinstance(data, str):  # a text message: the server's error
+            self.close()
+            raise PolicyServerError(f"the policy server at {self.uri} failed: "
+                                    f"{server_text(data)}")
+        try:
+            metadata = unpackb(data)
+        except WireError as error:
+            self.close()
+            raise PolicyServerError(f"the policy server at {self.uri} sent metadata that is "
+                                    f"not msgpack-numpy: {error}") from None
+        if not isinstance(metadata, dict):
+            self.close()
+            raise PolicyServerError(f"the policy server at {self.uri} sent metadata that is "
+                                    f"not a map: {server_text(repr(metadata))}")
+        return metadata
+
+    def _too_big_text(self, error: ConnectionClosed, what: str) -> str:
+        if _too_big(error) == "sent":
+            return (f"the policy server at {self.uri} sent {what} over this client's limit of "
+                    f"{size_text(self.max_message)} (raise it with ?max_message=BYTES)")
+        return (f"the policy server at {self.uri} refused a message as over its size limit "
+                f"({server_text(error.rcvd.reason)}; `robofollow serve --max-message` raises "
+                "it)")
 
     def _call(self, message: dict) -> dict:
         """Send one message and return the reply, reconnecting on a lost connection or a
-        time-out (up to `retries` times)."""
+        time-out (up to `retries` times); a message over either end's limit, or a reply
+        that is not the protocol, fails at once."""
         for attempt in range(self.retries + 1):
             try:
                 if self.connection is None:
                     self._connect()
                 self.connection.send(packb(message))
                 reply = self.connection.recv(timeout=self.timeout)
-            except (OSError, TimeoutError, ConnectionClosed, PolicyConnectionError) as error:
+            except ConnectionClosed as error:
                 self.close()
-                if attempt == self.retries:
-                    raise PolicyConnectionError(
-                        f"the policy server at {self.uri} did not answer after "
-                        f"{self.retries + 1} tries: {type(error).__name__}: {error}") from None
-                continue
-            if isinstance(reply, str):  # the server's traceback
-                raise RoboFollowError(f"the policy server failed: {reply.strip()}")
-            return unpackb(reply)
-        raise AssertionError("unreachable")
+                if _too_big(error):
+                    raise PolicyServerError(self._too_big_text(error, "a reply")) from None
+                failure = error
+            except (OSError, TimeoutError, PolicyConnectionError) as error:
+                self.close()
+                failure = error
+            else:
+                break
+            if attempt == self.retries:
+                raise PolicyConnectionError(
+                    f"the policy server at {self.uri} did not answer after "
+                    f"{self.retries + 1} tries: {type(failure).__name__}: {failure}") from None
+        if isinstance(reply, str):  # the server's error
+            self.close()
+            raise PolicyServerError(f"the policy server failed: {server_text(reply)}")
+        try:
+            answer = unpackb(reply)
+        except WireError as error:
+            self.close()
+            raise PolicyServerError(f"the policy server at {self.uri} sent a reply that is "
+                                    f"not msgpack-numpy: {error}") from None
+        if not isinstance(answer, dict):
+            raise PolicyServerError(f"the policy server at {self.uri} sent a reply that is "
+                                    f"not a map: {server_text(repr(answer))}")
+        return answer
 
     def reset(self) -> None:
         if "robofollow" in self.metadata:
@@ -88,13 +169,13 @@ class WebsocketPolicy:
         if "images" in observation:
             message["images"] = {camera: np.ascontiguousarray(image.transpose(2, 0, 1))
                                  for camera, image in observation["images"].items()}
-        if "privileged" in observation:
+        if "privileged" in observation and self.allow_privileged:
             message["privileged"] = privileged_message(observation["privileged"])
         reply = self._call(message)
         if "actions" not in reply:
-            raise RoboFollowError(f"the policy server's reply has no 'actions' "
-                                  f"(keys: {sorted(reply)})")
-        return np.asarray(reply["actions"])
+            raise PolicyServerError(f"the policy server's reply has no 'actions' (keys: "
+                                    f"{server_text(sorted(map(str, reply)))})")
+        return reply["actions"]  # checked by the episode (validate_actions)
 
     def close(self) -> None:
         if self.connection is not None:
@@ -102,36 +183,87 @@ class WebsocketPolicy:
             self.connection = None
 
 
-class PolicyServer:
-    """Serves one Python policy; one client at a time is the expected use."""
+def _images(message: dict) -> dict | None:
+    if "images" not in message:
+        return None
+    images = message["images"]
+    if not isinstance(images, dict) or not all(
+            isinstance(images[camera], np.ndarray) and images[camera].ndim == 3
+            for camera in CAMERA_NAMES if camera in images):
+        raise RequestError("'images' must map cameras to [3, H, W] arrays")
+    return {camera: np.ascontiguousarray(images[camera].transpose(1, 2, 0))
+            for camera in CAMERA_NAMES if camera in images}
 
-    def __init__(self, compiled: Compiled, policy_spec: str):
-        self.served = ServedPolicy(compiled, policy_spec)
+
+class PolicyServer:
+    """Serves one Python policy; each connection in its own thread with its own policy
+    instance, at most `limits.max_clients` at once."""
+
+    def __init__(self, compiled: Compiled, policy_spec: str,
+                 limits: ServerLimits | None = None):
+        self.limits = limits or ServerLimits()
+        self.pool = PolicyPool(compiled, policy_spec, self.limits.max_clients)
+        self.server = None
 
     def handle(self, connection) -> None:
-        connection.send(packb(self.served.metadata))
+        peer = str(getattr(connection, "remote_address", "client"))
         try:
-            for data in connection:
-                message = unpackb(data)
-                if message.get("reset"):
-                    self.served.reset()
-                    connection.send(packb({"reset": True}))
-                    continue
-                images = ({camera: np.ascontiguousarray(message["images"][camera]
-                                                        .transpose(1, 2, 0))
-                           for camera in CAMERA_NAMES if camera in message["images"]}
-                          if "images" in message else None)
-                actions = self.served.act(message["state"], message.get("prompt", ""), images,
-                                          message.get("privileged"), message.get("step", 0))
-                connection.send(packb({"actions": actions}))
-        except ConnectionClosed:
+            served = self.pool.acquire()
+        except Exception as error:  # busy
+            self._fail(connection, error_reply(error, peer))
             return
-        except Exception:  # the client gets the traceback, as openpi servers do
-            connection.send(traceback.format_exc())
-            connection.close()
+        try:
+            connection.send(packb(self.pool.metadata))
+            while True:
+                try:
+                    data = connection.recv(timeout=self.limits.idle_timeout)
+                except TimeoutError:
+                    log.warning("%s: idle for %s s; closed", peer, self.limits.idle_timeout)
+                    connection.close(CloseCode.GOING_AWAY, "idle")
+                    return
+                try:
+                    message = unpackb(data)
+                    if not isinstance(message, dict):
+                        raise RequestError("an observation must be a map")
+                    if message.get("reset"):
+                        served.reset()
+                        connection.send(packb({"reset": True}))
+                        continue
+                    if "state" not in message:
+                        raise RequestError("the observation has no 'state'")
+                    actions = served.act(message["state"], message.get("prompt", ""),
+                                         _images(message), message.get("privileged"),
+                                         message.get("step", 0))
+                    reply = packb({"actions": actions})
+                except Exception as error:  # openpi's way: a text message, then close
+                    if isinstance(error, WireError):
+                        error = RequestError(str(error))
+                    self._fail(connection, error_reply(error, peer))
+                    return
+                connection.send(reply)
+        except ConnectionClosed:  # the client left, or sent a message over the limit
+            return
+        except Exception:  # never the server: only this connection ends
+            log.exception("%s: connection failed", peer)
+        finally:
+            self.pool.release(served)
 
-    def serve_forever(self, host: str, port: int, ready=None) -> None:
-        with serve(self.handle, host, port, compression=None, max_size=None) as server:
+    @staticmethod
+    def _fail(connection, text: str) -> None:
+        try:
+            connection.send(text)
+            connection.close(CloseCode.INTERNAL_ERROR, "error")
+        except ConnectionClosed:
+            pass
+
+    def serve_forever(self, host: str = DEFAULT_HOST, port: int = 0, ready=None) -> None:
+        with serve(self.handle, host, port, compression=None, max_size=self.limits.max_message,
+                   open_timeout=min(10.0, self.limits.idle_timeout)) as server:
+            self.server = server
             if ready is not None:
                 ready(server)
             server.serve_forever()
+
+    def shutdown(self) -> None:
+        if self.server is not None:
+            self.server.shutdown()
