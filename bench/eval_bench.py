@@ -28,9 +28,9 @@ import tempfile
 import time
 from pathlib import Path
 
-import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
 import numpy as np
 
+import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
 from robofollow.build import all_episodes, compile_specs
 from robofollow.eval.reference import ExpertPolicy
 from robofollow.eval.runner import EvalOptions, evaluate, read_results

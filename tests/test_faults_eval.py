@@ -283,7 +283,7 @@ def test_outputs_that_cannot_be_written_are_refused_up_front(tmp_path, capsys):
 
 def test_a_disk_that_fills_mid_run_stops_it_with_whole_lines_and_it_resumes(tmp_path, capsys,
                                                                             monkeypatch):
-    from robofollow.eval.runner import ResultsFile
+    from robofollow.eval.run_folder import ResultsFile
 
     out, writes = tmp_path / "run", []
     original = ResultsFile.write
@@ -309,7 +309,7 @@ def test_a_disk_that_fills_mid_run_stops_it_with_whole_lines_and_it_resumes(tmp_
 
 
 def test_json_lines_are_split_at_newlines_only(tmp_path):
-    from robofollow.eval.runner import ResultsFile, read_results
+    from robofollow.eval.run_folder import ResultsFile, read_results
 
     record = {"episode": "e\u2028x", "scene": "scene1", "level": "L0", "task": "t\u2029",
               "intent_score": 0.0, "execution_score": 0.0, "complete": False}

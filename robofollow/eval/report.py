@@ -16,7 +16,8 @@ import numpy as np
 
 from robofollow.compiler.spec import LEVELS
 from robofollow.errors import RoboFollowError
-from robofollow.eval.runner import RESULTS, RUN_FILE, EvalOptions, read_results, summary
+from robofollow.eval.run_folder import RESULTS, RUN_FILE, read_results
+from robofollow.eval.runner import EvalOptions, summary
 from robofollow.oracle.metrics import METRICS, table
 
 # Every HTML template (`*.html.j2`) escapes what it shows: run records hold text from

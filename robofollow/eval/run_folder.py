@@ -1,0 +1,247 @@
+"""The run folder on disk: RUN/run.json, RUN/episodes.jsonl (whole lines appended, read back
+with their corrupt lines), RUN/summary.json and the lock that keeps one run in a folder.
+Every failure is a RoboFollowError that says what and where; nothing is lost."""
+
+from __future__ import annotations
+
+import errno
+import fcntl
+import json
+import os
+import sys
+from collections.abc import Iterator
+from contextlib import contextmanager, suppress
+from pathlib import Path
+
+from robofollow.data.files import changed_options, json_line, write_json_atomic
+from robofollow.errors import RoboFollowError
+
+RUN_FILE, RESULTS, SUMMARY, LOCK = "run.json", "episodes.jsonl", "summary.json", ".lock"
+DROPPED = RESULTS + ".dropped"  # corrupt lines that --drop-corrupt moved out of RESULTS
+_RECORD_FIELDS = {"episode": str, "scene": str, "level": str, "task": str,
+                  "intent_score": (int, float), "execution_score": (int, float),
+                  "complete": bool}  # what the summary reads of every record
+
+
+class EvalRunError(RoboFollowError):
+    """The run folder cannot be used as asked (or the run cannot go on)."""
+
+
+class EvalOutputError(EvalRunError):
+    """An output path that cannot be written."""
+
+
+class RunInUseError(EvalRunError):
+    """Another run holds the run folder."""
+
+
+class CorruptResultsError(EvalRunError):
+    """Lines of RUN/episodes.jsonl that are not whole episode records."""
+
+    def __init__(self, path: Path, problems: list[tuple[int, str]]):
+        shown = "; ".join(f"line {number}: {why}" for number, why in problems[:5])
+        more = f" (and {len(problems) - 5} more)" if len(problems) > 5 else ""
+        count = f"{len(problems)} corrupt line{'s' if len(problems) != 1 else ''}"
+        super().__init__(
+            f"{path} has {count}: {shown}{more}. To resume, run the same command with "
+            f"--resume --drop-corrupt: it moves such lines to {path.with_name(DROPPED)} and "
+            "evaluates again the episodes left without a record")
+        self.path, self.problems = path, problems
+
+
+RESUMABLE = ("; the finished episodes are kept: fix it and run the same command with --resume "
+             "to continue")
+
+
+def _record_problem(record) -> str | None:
+    if not isinstance(record, dict):
+        return f"a JSON {type(record).__name__}, not an episode record"
+    for key, kind in _RECORD_FIELDS.items():
+        if key not in record:
+            return f"no {key!r}"
+        if not isinstance(record[key], kind) or (kind != bool and isinstance(record[key], bool)):
+            return f"{key!r} is {json.dumps(record[key])[:40]}"
+    return None
+
+
+def _scan(path: Path) -> tuple[list[dict], list[bytes], list[tuple[int, bytes, str]]]:
+    """The whole records of a results file, their lines, and its corrupt lines (number, line,
+    what is wrong). Lines end at "\\n" only; a last line cut short by a kill is removed from
+    the file."""
+    if not path.is_file():
+        return [], [], []
+    data = path.read_bytes()
+    whole = data[:data.rfind(b"\n") + 1]
+    if len(whole) != len(data):
+        with open(path, "r+b") as f:
+            f.truncate(len(whole))
+    records, lines, corrupt, seen = [], [], [], {}
+    for number, line in enumerate(whole.split(b"\n")[:-1], start=1):
+        if not line.strip():
+            continue
+        why = None
+        try:
+            record = json.loads(line.decode("utf-8"))
+        except UnicodeDecodeError as error:
+            why = f"not UTF-8 text (byte {error.start + 1})"
+        except json.JSONDecodeError as error:
+            why = f"not JSON ({error.msg} at column {error.colno})"
+        else:
+            why = _record_problem(record)
+            if why is None and record["episode"] in seen:
+                why = f"repeats episode {record['episode']} of line {seen[record['episode']]}"
+        if why is not None:
+            corrupt.append((number, line, why))
+            continue
+        seen[record["episode"]] = number
+        records.append(record)
+        lines.append(line)
+    return records, lines, corrupt
+
+
+def read_results(path: Path) -> list[dict]:
+    """The finished episodes; a last line cut short by a kill is removed from the file, and a
+    corrupt line raises CorruptResultsError (with its line number and what is wrong)."""
+    records, _, corrupt = _scan(path)
+    if corrupt:
+        raise CorruptResultsError(path, [(number, why) for number, _, why in corrupt])
+    return records
+
+
+def drop_corrupt_lines(path: Path) -> list[dict]:
+    """Move the corrupt lines of a results file to its side file (appended, nothing is
+    lost), keep the whole records; returns them."""
+    records, lines, corrupt = _scan(path)
+    if not corrupt:
+        return records
+    side, partial_file = path.with_name(DROPPED), path.with_name(path.name + ".partial")
+    try:
+        with open(side, "ab") as f:
+            f.writelines(line + b"\n" for _, line, _ in corrupt)
+            f.flush()
+            os.fsync(f.fileno())
+        partial_file.write_bytes(b"".join(line + b"\n" for line in lines))
+        os.replace(partial_file, path)
+    except OSError as error:
+        raise EvalOutputError(f"cannot drop the corrupt lines of {path}: "
+                              f"{error.strerror or error}") from None
+    numbers = ", ".join(str(number) for number, _, _ in corrupt[:10])
+    print(f"dropped {len(corrupt)} corrupt line{'s' if len(corrupt) != 1 else ''} of {path} "
+          f"(line {numbers}{' …' if len(corrupt) > 10 else ''}); they are kept in {side}",
+          file=sys.stderr)
+    return records
+
+
+class ResultsFile:
+    """RUN/episodes.jsonl, open for appending whole lines. A write that fails (a full disk) is
+    cut back to the last whole line and stops the run with EvalOutputError."""
+
+    def __init__(self, path: Path):
+        self.path = path
+        try:
+            self.fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+        except OSError as error:
+            raise EvalOutputError(f"cannot write {path}: {error.strerror or error}") from None
+
+    def write(self, data: bytes) -> None:
+        view = memoryview(data)
+        while view:
+            view = view[os.write(self.fd, view):]
+
+    def append(self, record: dict) -> None:
+        data = json_line(record).encode("utf-8")
+        end = os.lseek(self.fd, 0, os.SEEK_END)
+        try:
+            self.write(data)
+        except OSError as error:
+            with suppress(OSError):
+                os.ftruncate(self.fd, end)  # whole lines only
+            raise EvalOutputError(f"cannot write {self.path}: {error.strerror or error}"
+                                  f"{RESUMABLE}") from None
+
+    def close(self) -> None:
+        os.close(self.fd)
+
+    def __enter__(self) -> "ResultsFile":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def _holds_files(out: Path) -> bool:
+    return out.is_dir() and any(p.name != LOCK for p in out.iterdir())
+
+
+def check_out(out: Path) -> None:
+    """Why the run folder cannot be used, said before anything is written."""
+    try:
+        if out.exists() and not out.is_dir():
+            raise EvalOutputError(f"the run folder {out} is a file; choose a folder (new or "
+                                  "holding a run to resume)")
+        existing = next(p for p in (out, *out.parents) if p.exists())
+        if not existing.is_dir():
+            raise EvalOutputError(f"cannot create the run folder {out}: {existing} is a file")
+        if not os.access(existing, os.W_OK | os.X_OK):
+            raise EvalOutputError(f"cannot write in {existing}: permission denied")
+        if not (out / RUN_FILE).is_file() and _holds_files(out):
+            raise EvalRunError(f"{out} is not empty and holds no run")
+    except OSError as error:
+        raise EvalOutputError(f"cannot use the run folder {out}: "
+                              f"{error.strerror or error}") from None
+
+
+@contextmanager
+def run_lock(out: Path) -> Iterator[None]:
+    """Hold RUN/.lock (made with its folder) for the block; RunInUseError at once if another
+    process holds it. flock goes with its process, so a killed run's lock never blocks."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        fd = os.open(out / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError as error:
+        raise EvalOutputError(f"cannot write in the run folder {out}: "
+                              f"{error.strerror or error}") from None
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError as error:
+            if error.errno not in (errno.EWOULDBLOCK, errno.EAGAIN, errno.EACCES):
+                raise EvalOutputError(f"cannot lock {out / LOCK}: {error.strerror}") from None
+            holder = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+            by = f" (process {holder})" if holder.isdigit() else ""
+            raise RunInUseError(f"{out} is in use by another robofollow eval{by}; wait for it "
+                                "to end, or choose another folder") from None
+        with suppress(OSError):  # (only to name the holder)
+            os.ftruncate(fd, 0)
+            os.pwrite(fd, f"{os.getpid()}\n".encode(), 0)
+        yield
+    finally:
+        os.close(fd)
+
+
+def write_json(path: Path, data) -> None:
+    try:
+        write_json_atomic(path, data)
+    except OSError as error:
+        raise EvalOutputError(f"cannot write {path}: {error.strerror or error}"
+                              f"{RESUMABLE}") from None
+
+
+def prepare(out: Path, options: dict, resume: bool) -> None:
+    """Record a new run's options, or check that a resumed run has the same."""
+    run_file = out / RUN_FILE
+    if run_file.is_file():
+        try:
+            previous = json.loads(run_file.read_text(encoding="utf-8"))
+        except (OSError, ValueError) as error:
+            raise EvalRunError(f"{run_file} cannot be read: {error}") from None
+        if not resume:
+            raise EvalRunError(f"{out} already holds a run; pass --resume to continue it, or "
+                               "choose another folder")
+        problem = changed_options(previous, options)
+        if problem:
+            raise EvalRunError(f"{out} {problem}")
+        return
+    if _holds_files(out):
+        raise EvalRunError(f"{out} is not empty and holds no run")
+    write_json(run_file, options)
