@@ -491,7 +491,8 @@ def test_a_failing_served_policy_sends_its_message_and_logs_its_traceback(caplog
         with pytest.raises(PolicyServerError) as failure:
             policy.act({"state": HOME, "instruction": "x"})
         policy.close()
-    assert str(failure.value) == "the policy server failed: RuntimeError: model crashed"
+    assert str(failure.value) == (f"the policy server at ws://127.0.0.1:{port} failed: "
+                                  "RuntimeError: model crashed")
     assert any(record.exc_info and "model crashed" in str(record.exc_info[1])
                for record in caplog.records)  # the traceback stays in the server's log
 

@@ -97,21 +97,26 @@ class WebsocketPolicy:
             self.close()
             raise PolicyConnectionError(f"cannot reach the policy server at {self.uri}: "
                                         f"{type(error).__name__}: {error}") from None
+        return self._message(data, "metadata")
+
+    def _message(self, data: str | bytes, what: str) -> dict:
+        """A message from the server as a map; its error text, or anything that is not a
+        msgpack-numpy map, is a PolicyServerError (and the connection is closed)."""
         if isinstance(data, str):  # a text message: the server's error
             self.close()
             raise PolicyServerError(f"the policy server at {self.uri} failed: "
                                     f"{server_text(data)}")
         try:
-            metadata = unpackb(data)
+            message = unpackb(data)
         except WireError as error:
             self.close()
-            raise PolicyServerError(f"the policy server at {self.uri} sent metadata that is "
+            raise PolicyServerError(f"the policy server at {self.uri} sent {what} that is "
                                     f"not msgpack-numpy: {error}") from None
-        if not isinstance(metadata, dict):
+        if not isinstance(message, dict):
             self.close()
-            raise PolicyServerError(f"the policy server at {self.uri} sent metadata that is "
-                                    f"not a map: {server_text(repr(metadata))}")
-        return metadata
+            raise PolicyServerError(f"the policy server at {self.uri} sent {what} that is "
+                                    f"not a map: {server_text(repr(message))}")
+        return message
 
     def _too_big_text(self, error: ConnectionClosed, what: str) -> str:
         if _too_big(error) == "sent":
@@ -145,19 +150,7 @@ class WebsocketPolicy:
                 raise PolicyConnectionError(
                     f"the policy server at {self.uri} did not answer after "
                     f"{self.retries + 1} tries: {type(failure).__name__}: {failure}") from None
-        if isinstance(reply, str):  # the server's error
-            self.close()
-            raise PolicyServerError(f"the policy server failed: {server_text(reply)}")
-        try:
-            answer = unpackb(reply)
-        except WireError as error:
-            self.close()
-            raise PolicyServerError(f"the policy server at {self.uri} sent a reply that is "
-                                    f"not msgpack-numpy: {error}") from None
-        if not isinstance(answer, dict):
-            raise PolicyServerError(f"the policy server at {self.uri} sent a reply that is "
-                                    f"not a map: {server_text(repr(answer))}")
-        return answer
+        return self._message(reply, "a reply")
 
     def reset(self) -> None:
         if "robofollow" in self.metadata:
