@@ -10,6 +10,7 @@ import pytest
 
 from robofollow.build import compile_specs
 from robofollow.cli import main
+from robofollow.errors import RoboFollowError
 from robofollow.oracle.task_audit import (
     FINDING_KINDS,
     ListedTask,
@@ -187,4 +188,11 @@ def test_bad_task_list_lines_are_named(tmp_path, line, message):
     path = tmp_path / "bad.jsonl"
     path.write_text(json.dumps(TASKS[0]) + "\n" + line + "\n")
     with pytest.raises(Exception, match=message):
+        read_task_list(path)
+
+
+def test_a_task_list_that_is_not_utf8_is_named_at_its_byte(tmp_path):
+    path = tmp_path / "bad.jsonl"
+    path.write_bytes(json.dumps(TASKS[0]).encode() + b'\n{"id": "\xff"}\n')
+    with pytest.raises(RoboFollowError, match=r"bad.jsonl:2:9: not UTF-8 text \(byte 0xff\)"):
         read_task_list(path)

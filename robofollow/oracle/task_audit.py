@@ -279,9 +279,16 @@ def _shown(value) -> str:
 def read_task_list(path) -> list[ListedTask]:
     """The tasks of a JSON Lines file; a bad line is an error naming file:line."""
     try:
-        lines = path.read_text(encoding="utf-8").splitlines()
+        data = path.read_bytes()
     except OSError as error:
         raise RoboFollowError(f"cannot read {path}: {error.strerror}") from None
+    try:
+        lines = data.decode("utf-8").split("\n")
+    except UnicodeDecodeError as error:
+        line = data.count(b"\n", 0, error.start) + 1
+        column = error.start - data.rfind(b"\n", 0, error.start)
+        raise RoboFollowError(f"{path}:{line}:{column}: not UTF-8 text (byte "
+                              f"0x{data[error.start]:02x})") from None
     tasks, seen = [], {}
     for number, line in enumerate(lines, start=1):
         if not line.strip():
