@@ -19,6 +19,7 @@ from robofollow.compiler.spec import LEVELS
 from robofollow.data.files import json_line
 from robofollow.data.jobs import FORMATS, INSTRUCTION_MODES
 from robofollow.errors import InstructionError, RoboFollowError
+from robofollow.resources import builtin_specs
 from robofollow.workers import EXECUTORS
 
 _PARSE_EXAMPLES = """\
@@ -32,6 +33,22 @@ With '-', each line of standard input is one instruction and each output line is
 object: {"text": ..., "lf": {...}} or {"text": ..., "error": {"type", "column", "message"}}.
 The exit status is 1 when any instruction fails to parse.
 """
+
+
+_SPECS_DEFAULT = "./specs when this folder has one, else the built-in benchmark"
+
+
+def specs_of(args) -> Path:
+    """The specs a command reads: as given; else ./specs when the current folder has one;
+    else the benchmark's own, installed with the package. Said on stderr when not given."""
+    if args.specs is not None:
+        return Path(args.specs)
+    if Path("specs").is_dir():
+        print("specs: ./specs (this folder's; --specs chooses others)", file=sys.stderr)
+        return Path("specs")
+    path = builtin_specs()
+    print(f"specs: the built-in benchmark ({path})", file=sys.stderr)
+    return path
 
 
 def _parse_one(text: str, args) -> int:
@@ -81,12 +98,12 @@ def cmd_compile(args) -> int:
     from robofollow.build import check_out, clean, compile_specs, summary, write
 
     check_out(Path(args.out))  # before the work: an --out that cannot take the build is refused
-    compiled = compile_specs(Path(args.specs))
+    specs = specs_of(args)
+    compiled = compile_specs(specs)
     changed = write(compiled, Path(args.out))
     print(summary(compiled, changed), end="")
     print(f"written to {args.out}")
-    verified = _verify(compiled, Path(args.specs), args.verify, args.workers) if args.verify \
-        else True
+    verified = _verify(compiled, specs, args.verify, args.workers) if args.verify else True
     return 0 if clean(compiled) and verified else 1
 
 
@@ -112,7 +129,7 @@ def cmd_audit(args) -> int:
     from robofollow.data.files import write_jsonl
     from robofollow.oracle.task_audit import audit_task_list, read_task_list, task_list
 
-    compiled = compile_specs(Path(args.specs))
+    compiled = compile_specs(specs_of(args))
     if args.export_tasks:
         try:
             write_jsonl(Path(args.export_tasks), task_list(compiled.splits))
@@ -197,7 +214,7 @@ def cmd_expert(args) -> int:
     from robofollow.sim.simulation import CONTROL_HZ
     from robofollow.sim.video import write_video
 
-    compiled = compile_specs(Path(args.specs))
+    compiled = compile_specs(specs_of(args))
     episode = find_episode(compiled, args.episode)
     width, height = args.image_size
     frames: list = []
@@ -235,7 +252,7 @@ def cmd_score(args) -> int:
     if not episode_id:
         raise RoboFollowError(f"{args.trajectory} does not say which episode it records; "
                               "pass --episode ID")
-    compiled = compile_specs(Path(args.specs))
+    compiled = compile_specs(specs_of(args))
     record = find_episode(compiled, episode_id)
     result = score_recording(compiled, record, trajectory)
     if args.json:
@@ -251,7 +268,7 @@ def cmd_render(args) -> int:
     from robofollow.build import compile_specs
     from robofollow.sim.picture import layout_picture
 
-    compiled = compile_specs(Path(args.specs))
+    compiled = compile_specs(specs_of(args))
     layout = _layout(compiled, args.scene, args.layout)
     width, height = args.image_size
     layout_picture(compiled.spec.scenes[args.scene], layout, args.seed, width,
@@ -284,7 +301,7 @@ def cmd_vqa(args) -> int:
     out = Path(args.out)
     if out.is_dir() and any(out.iterdir()):
         raise RoboFollowError(f"{out} is not empty; choose a new folder")
-    compiled = compile_specs(Path(args.specs))
+    compiled = compile_specs(specs_of(args))
     scene, layout = (SCENE, LAYOUT) if args.qa20 else (args.scene,
                                                        _layout(compiled, args.scene, args.layout))
     records = write_probe(compiled, scene, layout, out, args.count, args.seed, args.qa20,
@@ -309,7 +326,7 @@ def cmd_generate(args) -> int:
     from robofollow.data.jobs import select_tasks
     from robofollow.data.units import Options
 
-    specs = Path(args.specs)
+    specs = specs_of(args)
     compiled = compile_specs(specs)
     width, height = args.image_size
     tasks = select_tasks(compiled, [t for t in (args.tasks or "").split(",") if t.strip()])
@@ -337,7 +354,12 @@ def cmd_generate(args) -> int:
 def cmd_train(args) -> int:
     from dataclasses import fields
 
-    from robofollow.learn.train import TrainOptions, default_cache, resumed_options, train
+    from robofollow.learn.train import (
+        TrainOptions,
+        default_cache,
+        resumed_options,
+        train,
+    )
 
     out = Path(args.out)
     tunable = [f.name for f in fields(TrainOptions) if f.name not in ("dataset", "kind")]
@@ -376,13 +398,13 @@ def cmd_dataset_check(args) -> int:
 
 def cmd_eval(args) -> int:
     from robofollow.build import compile_specs
+    from robofollow.eval.deadline import DEFAULT_POLICY_TIMEOUT
     from robofollow.eval.loading import is_server, with_privileged
     from robofollow.eval.report import write_report
-    from robofollow.eval.deadline import DEFAULT_POLICY_TIMEOUT
     from robofollow.eval.runner import EvalOptions, evaluate, failures_text
     from robofollow.eval.tables import table_text
 
-    compiled = compile_specs(Path(args.specs))
+    compiled = compile_specs(specs_of(args))
     scenes = _names(args.scenes, list(compiled.spec.scenes), "scene")
     levels = _names(args.levels, list(LEVELS), "level")
     known_tasks = [t.id for t in compiled.splits.tasks]
@@ -454,9 +476,9 @@ def _names(text: str | None, known: list[str], what: str) -> list[str]:
 
 
 def cmd_serve(args) -> int:
-    from robofollow.build import compile_specs
     import logging
 
+    from robofollow.build import compile_specs
     from robofollow.eval.serving import ServerLimits
     from robofollow.eval.tcp import TcpPolicyServer
     from robofollow.eval.websocket import PolicyServer
@@ -465,7 +487,7 @@ def cmd_serve(args) -> int:
                             else (PolicyServer, "ws"))
     limits = ServerLimits(args.max_message, args.idle_timeout, args.max_clients)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
-    server = server_class(compile_specs(Path(args.specs)), args.policy, limits)
+    server = server_class(compile_specs(specs_of(args)), args.policy, limits)
 
     def listening(_) -> None:  # only now can a client connect
         print(f"serving {args.policy} on {scheme}://{args.host}:{args.port} (Ctrl-C stops)",
@@ -507,8 +529,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "splits from the split rules, audit them, and write the episodes, goal "
                     "DAGs, rejected candidates, audit.json and summary.txt. Exit status 1 on "
                     "a bad spec or any audit finding.")
-    p.add_argument("specs", nargs="?", default="specs",
-                   help="a spec file or a folder of .rf files (default: specs)")
+    p.add_argument("specs", nargs="?", help="a spec file or a folder of .rf files "
+                                            "(default: " + _SPECS_DEFAULT + ")")
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     p.add_argument("--verify", type=int, nargs="?", const=1, default=0, metavar="ROUNDS",
                    help="then run the scripted expert on the first ROUNDS rounds (default 1) "
@@ -528,8 +550,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "expectation mismatches, behaviours outside the training repertoire, "
                     "leakage and level inconsistencies. Exit status 1 on a bad spec or any "
                     "finding.")
-    p.add_argument("specs", nargs="?", default="specs",
-                   help="a spec file or a folder of .rf files (default: specs)")
+    p.add_argument("specs", nargs="?", help="a spec file or a folder of .rf files "
+                                            "(default: " + _SPECS_DEFAULT + ")")
     p.add_argument("--tasks", metavar="FILE.jsonl", help="a task list to audit")
     p.add_argument("--export-tasks", metavar="FILE.jsonl",
                    help="write the compiled test tasks as a task list (expect = the compiled "
@@ -552,7 +574,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("trajectory", metavar="TRAJECTORY_FILE", help="a saved trajectory (.npz)")
     p.add_argument("--episode", metavar="ID",
                    help="episode id to score against (default: the one the file records)")
-    p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
+    p.add_argument("--specs", help="spec file or folder (default: " + _SPECS_DEFAULT + ")")
     p.add_argument("--json", action="store_true", help="print the EpisodeScore as JSON")
     p.set_defaults(handler=cmd_score)
 
@@ -566,7 +588,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--episode", required=True, metavar="ID",
                    help="episode id, <scene>/<level>/<task>#r<round> (see episodes/*.jsonl "
                         "of `robofollow compile`)")
-    p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
+    p.add_argument("--specs", help="spec file or folder (default: " + _SPECS_DEFAULT + ")")
     p.add_argument("--video", metavar="OUT.mp4",
                    help="write the three cameras side by side as an mp4")
     p.add_argument("--trajectory", metavar="OUT.npz", help="save the recorded trajectory")
@@ -586,7 +608,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("-o", "--output", required=True, metavar="OUT.png", help="image file")
     p.add_argument("--seed", type=int, help="apply this episode seed's jitter "
                                             "(default: nominal positions)")
-    p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
+    p.add_argument("--specs", help="spec file or folder (default: " + _SPECS_DEFAULT + ")")
     p.add_argument("--image-size", type=_size, default=(640, 480), metavar="WxH",
                    help="size of each of the two views (default: 640x480)")
     p.set_defaults(handler=cmd_render)
@@ -614,7 +636,7 @@ def build_parser() -> argparse.ArgumentParser:
                         "checkpoint folder, module:factory, ws://HOST:PORT (openpi) or "
                         "tcp://HOST:PORT (upstream); servers take ?timeout=S&retries=N")
     p.add_argument("--out", required=True, metavar="RUN", help="run folder")
-    p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
+    p.add_argument("--specs", help="spec file or folder (default: " + _SPECS_DEFAULT + ")")
     p.add_argument("--scenes", metavar="LIST", help="comma-separated scenes (default: all)")
     p.add_argument("--levels", metavar="LIST", help="comma-separated levels (default: all)")
     p.add_argument("--tasks", metavar="LIST", help="comma-separated task ids, e.g. "
@@ -687,7 +709,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--max-clients", type=_positive, metavar="N",
                    help="connections served at once, each with its own instance of the "
                         "policy; more are refused (default: 8)")
-    p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
+    p.add_argument("--specs", help="spec file or folder (default: " + _SPECS_DEFAULT + ")")
     p.set_defaults(handler=cmd_serve)
 
     p = commands.add_parser(
@@ -701,8 +723,8 @@ def build_parser() -> argparse.ArgumentParser:
                "task, 3,750 episodes\n  robofollow generate specs/ --out small/ "
                "--tasks scene1,pickup_left_cube --episodes-per-task 3\n  robofollow dataset "
                "check demos/", formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("specs", nargs="?", default="specs",
-                   help="a spec file or a folder of .rf files (default: specs)")
+    p.add_argument("specs", nargs="?", help="a spec file or a folder of .rf files "
+                                            "(default: " + _SPECS_DEFAULT + ")")
     p.add_argument("--out", required=True, metavar="DIR", help="dataset folder (new or empty, "
                                                               "or the one to --resume)")
     p.add_argument("--episodes-per-task", type=_positive, default=50, metavar="N",
@@ -734,7 +756,7 @@ def build_parser() -> argparse.ArgumentParser:
         epilog="examples:\n  robofollow vqa --scene scene2 --out vqa/scene2 --count 50\n  "
                "robofollow vqa --qa20 --out vqa/qa20\n  robofollow vqa score answers.jsonl",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    p.add_argument("--specs", default="specs", help="spec file or folder (default: specs)")
+    p.add_argument("--specs", help="spec file or folder (default: " + _SPECS_DEFAULT + ")")
     p.add_argument("--scene", default="scene2", help="scene id (default: scene2)")
     p.add_argument("--layout", help="layout name (default: the scene's first layout)")
     p.add_argument("--out", metavar="DIR", help="new folder for images and questions")

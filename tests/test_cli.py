@@ -81,3 +81,16 @@ def test_parse_stdin_survives_bytes_that_are_not_utf8():
     assert result.returncode == 1 and result.stderr == b""
     assert records[0]["lf"]["type"] == "pick"
     assert records[1]["error"]["type"] == "unknown_word"
+
+
+def test_a_command_outside_the_repository_uses_the_built_in_specs_and_says_so(tmp_path):
+    result = subprocess.run(["robofollow", "audit"], cwd=tmp_path, capture_output=True,
+                            text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert result.stderr.startswith("specs: the built-in benchmark (")
+    assert "4 scenes, 75 training tasks" in result.stdout
+    (tmp_path / "specs").mkdir()  # a specs/ folder here is this folder's benchmark
+    result = subprocess.run(["robofollow", "audit"], cwd=tmp_path, capture_output=True,
+                            text=True, timeout=300)
+    assert result.returncode == 1 and "specs: ./specs" in result.stderr
+    assert "Traceback" not in result.stderr
