@@ -320,7 +320,7 @@ class Realizer:
     def ref(self, ref: lf.Ref, determiner: bool = True, relative: bool = False) -> str:
         """A reference; `relative` puts every relation in a relative clause."""
         premods: list[str] = []
-        posts: list[tuple[str, str]] = []  # (how it opens when first: "" or "that is", phrase)
+        posts: list[tuple[str, str]] = []  # (how it opens when first: "", "that is", ..., phrase)
         for c in ref.constraints:
             if isinstance(c, lf.OrdinalIs):
                 continue
@@ -331,10 +331,7 @@ class Realizer:
                 posts.append(post)
         words = self.head(ref, premods)
         if posts:
-            # after 'and', 'the closest to X' would start a noun phrase: say 'closest to X'
-            (opening, first), rest = posts[0], [phrase.replace("the closest", "closest")
-                                                .replace("the farthest", "farthest")
-                                                for _, phrase in posts[1:]]
+            (opening, first), rest = posts[0], [phrase for _, phrase in posts[1:]]
             words.append(" and ".join([f"{opening} {first}".strip()] + rest))
         return ("the " if determiner else "") + " ".join(words)
 
@@ -349,8 +346,12 @@ class Realizer:
                 phrase = self.relation_phrase(c.relation, c.landmark)
             elif isinstance(c, lf.Between):
                 phrase = self.between_phrase(c)
-            else:
-                phrase = self.nearness_phrase(c) if as_pp else f"the {self.nearness_phrase(c)}"
+            elif as_pp:
+                phrase = self.nearness_phrase(c)
+            elif negated:
+                phrase = f"the {self.nearness_phrase(c)}"
+            else:  # 'the' only with the opening: after 'and', 'the closest ...' would be a noun
+                return ("that is the", self.nearness_phrase(c))  # phrase, not a description
             return ("" if as_pp else "that is", ("not " if negated else "") + phrase)
         if isinstance(c, lf.ExtremeIs) and not negated and self.s.extreme in ("post", "relative"):
             if self.s.extreme == "post" and not relative:

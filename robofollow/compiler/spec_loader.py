@@ -168,8 +168,9 @@ def _read(path: Path) -> bytes:
     return data
 
 
-def _not_utf8(data: bytes, error: UnicodeDecodeError) -> tuple[int, int, str, str]:
-    """(line, column, the line as text, what is wrong) of the first byte that is not UTF-8."""
+def not_utf8(data: bytes, error: UnicodeDecodeError) -> tuple[int, int, str, str]:
+    """(line, column, the line as text, what is wrong) of the first byte that is not UTF-8
+    (the column counts characters, as an editor does)."""
     start = error.start
     line_start = data.rfind(b"\n", 0, start) + 1
     line_end = data.find(b"\n", start)
@@ -280,7 +281,7 @@ class _Loader:
         try:
             return data.decode("utf-8")
         except UnicodeDecodeError as error:
-            line, column, shown, message = _not_utf8(data, error)
+            line, column, shown, message = not_utf8(data, error)
             self.errors.append(SpecError("encoding", message, file=self.file, line=line,
                                          column=column, source_line=shown))
             return None

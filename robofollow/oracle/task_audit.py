@@ -37,7 +37,7 @@ from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
 from robofollow.compiler.parser import parse
 from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import LEVELS, Spec
-from robofollow.compiler.spec_loader import spec_error
+from robofollow.compiler.spec_loader import not_utf8, spec_error
 from robofollow.compiler.splits import TestTask
 from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
 from robofollow.errors import InstructionError, RoboFollowError, SpecError
@@ -285,8 +285,7 @@ def read_task_list(path) -> list[ListedTask]:
     try:
         lines = data.decode("utf-8").split("\n")
     except UnicodeDecodeError as error:
-        line = data.count(b"\n", 0, error.start) + 1
-        column = error.start - data.rfind(b"\n", 0, error.start)
+        line, column, _, _ = not_utf8(data, error)
         raise RoboFollowError(f"{path}:{line}:{column}: not UTF-8 text (byte "
                               f"0x{data[error.start]:02x})") from None
     tasks, seen = [], {}
