@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import socket
+import subprocess
+import sys
+from contextlib import contextmanager
 from functools import lru_cache
 
 from robofollow.build import Compiled, all_episodes, compile_specs
@@ -20,3 +24,21 @@ def _episodes() -> dict[str, dict]:
 
 def episode(episode_id: str) -> dict:
     return _episodes()[episode_id]
+
+
+@contextmanager
+def serve_process(*options: str):
+    """`robofollow serve --policy noop` on a free loopback port, with `options` added; yields
+    (process, port), its stdout a text pipe; terminated on leaving."""
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    process = subprocess.Popen(
+        [sys.executable, "-m", "robofollow.cli", "serve", "--policy", "noop", "--port",
+         str(port), "--specs", str(builtin_specs()), *options],
+        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        yield process, port
+    finally:
+        process.terminate()
+        process.wait(10)

@@ -8,8 +8,6 @@ import json
 import re
 import socket
 import struct
-import subprocess
-import sys
 import threading
 
 import numpy as np
@@ -20,9 +18,8 @@ from robofollow.eval.loading import PolicyLoadError, load_policy
 from robofollow.eval.policy import PolicyConnectionError
 from robofollow.eval.reference import ExpertPolicy
 from robofollow.eval.tcp import TcpPolicy, TcpPolicyServer
-from robofollow.resources import builtin_specs
 from robofollow.sim import robot
-from tests.sim_helpers import benchmark, episode
+from tests.sim_helpers import benchmark, episode, serve_process
 
 EPISODE = "scene2/L0/pickup_left_cube#r1"
 
@@ -187,21 +184,11 @@ def test_the_tcp_server_answers_bad_requests_with_an_error_and_keeps_serving():
 
 
 def test_robofollow_serve_speaks_tcp_when_asked():
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
-    process = subprocess.Popen(
-        [sys.executable, "-m", "robofollow.cli", "serve", "--protocol", "tcp", "--policy",
-         "noop", "--host", "127.0.0.1", "--port", str(port), "--specs", str(builtin_specs())],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
+    with serve_process("--protocol", "tcp", "--host", "127.0.0.1") as (process, port):
         assert "serving noop on tcp://127.0.0.1:" in process.stdout.readline()
         policy = TcpPolicy("127.0.0.1", port, timeout=10)
         policy.reset()
         assert policy.uses == frozenset()
         actions = policy.act({"state": robot.home_state(), "instruction": "stay"})
         policy.close()
-    finally:
-        process.terminate()
-        process.wait(10)
     assert actions.shape == (50, 14)

@@ -151,29 +151,15 @@ def test_no_server_is_a_clear_error():
 
 
 def test_robofollow_serve_runs_a_policy_server(tmp_path):
-    import socket
-    import subprocess
-    import sys
+    from tests.sim_helpers import serve_process
 
-    from robofollow.resources import builtin_specs
-
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
-    process = subprocess.Popen(
-        [sys.executable, "-m", "robofollow.cli", "serve", "--policy", "noop", "--host",
-         "127.0.0.1", "--port", str(port), "--specs", str(builtin_specs())],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    try:
+    with serve_process("--host", "127.0.0.1") as (process, port):
         assert "serving noop on ws://127.0.0.1:" in process.stdout.readline()
         policy = WebsocketPolicy(f"ws://127.0.0.1:{port}", timeout=10)
         assert policy.metadata["robofollow"]["uses"] == [] and policy.uses == frozenset()
         policy.reset()
         actions = policy.act({"state": robot.home_state(), "instruction": "stay"})
         policy.close()
-    finally:
-        process.terminate()
-        process.wait(10)
     np.testing.assert_allclose(actions, np.repeat(robot.home_state()[None], 50, axis=0),
                                rtol=0, atol=1e-6)
 

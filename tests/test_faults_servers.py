@@ -15,8 +15,6 @@ import re
 import selectors
 import socket
 import struct
-import subprocess
-import sys
 import threading
 import time
 from contextlib import contextmanager
@@ -47,7 +45,7 @@ from robofollow.eval.websocket import PolicyServer, WebsocketPolicy
 from robofollow.eval.wire import MAX_MESSAGE_BYTES, packb, unpackb
 from robofollow.resources import builtin_specs
 from robofollow.sim import robot
-from tests.sim_helpers import benchmark, episode
+from tests.sim_helpers import benchmark, episode, serve_process
 
 WAIT = 10.0  # seconds: the longest any step of these tests may wait
 HOME = robot.home_state()
@@ -563,14 +561,7 @@ def test_serve_defaults_to_listening_on_this_machine_only(capsys):
 @pytest.mark.slow
 @pytest.mark.skipif(not Path("/proc/net/tcp").is_file(), reason="reads Linux's /proc/net/tcp")
 def test_robofollow_serve_with_defaults_listens_on_loopback_only():
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port = probe.getsockname()[1]
-    process = subprocess.Popen(
-        [sys.executable, "-m", "robofollow.cli", "serve", "--protocol", "tcp", "--policy",
-         "noop", "--port", str(port), "--specs", str(builtin_specs())],
-        stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
-    try:
+    with serve_process("--protocol", "tcp") as (process, port):
         with selectors.DefaultSelector() as selector:
             selector.register(process.stdout, selectors.EVENT_READ)
             assert selector.select(timeout=60), "serve did not start within 60 s"
@@ -583,9 +574,6 @@ def test_robofollow_serve_with_defaults_listens_on_loopback_only():
         with _client(port) as connection:  # and it is there on loopback
             connection.sendall(_frame({"cmd": "reset", "obs": None}))
             assert "res" in _read(connection)
-    finally:
-        process.terminate()
-        process.wait(WAIT)
 
 
 # -- HTML reports escape what they show ----------------------------------------------------
