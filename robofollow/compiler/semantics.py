@@ -205,7 +205,6 @@ class Semantics:
         drafts: list[Draft] = []
         current: Draft | None = None
         default_arm: str | None = None
-        domain: lf.Ref | None = None
         fronted: list[RoutePhrase | OrientationPhrase] = []
         after_break = True
         segments = steps.segments
@@ -215,7 +214,7 @@ class Semantics:
                 after_break = True
                 continue
             if isinstance(segment, Among):
-                domain = self.domain = lf.Ref(noun=segment.noun, constraints=tuple(
+                self.domain = lf.Ref(noun=segment.noun, constraints=tuple(
                     self.premod(p) for p in segment.premods))
             elif isinstance(segment, ArmPhrase):
                 if current is None and not drafts:
@@ -227,7 +226,7 @@ class Semantics:
                 else:
                     self.set_arm(current, segment)
             elif isinstance(segment, Action):
-                current, started = self.action(segment, current, focus, domain)
+                current, started = self.action(segment, current, focus)
                 drafts.extend(started)
                 focus = current.object
             elif isinstance(segment, (RoutePhrase, OrientationPhrase)) and current is None and \
@@ -269,8 +268,8 @@ class Semantics:
                                         f"{arm.side})")
         draft.arm = arm.side
 
-    def action(self, action: Action, current: Draft | None, focus: lf.Ref | None,
-               domain: lf.Ref | None) -> tuple[Draft, list[Draft]]:
+    def action(self, action: Action, current: Draft | None,
+               focus: lf.Ref | None) -> tuple[Draft, list[Draft]]:
         """Apply an action clause; returns (the current draft, the drafts it started)."""
         meanings = self.meanings(action.chain, describing=action.verb in _PICK_VERBS)
         anaphoric = isinstance(action.obj, It) or action.obj.det == "that"
@@ -285,11 +284,11 @@ class Semantics:
         if anaphoric:
             obj = self.resolve_anaphor(action.obj, referent, described)
         else:
-            obj = self.describe(action.obj, described, domain)
+            obj = self.describe(action.obj, described)
         if (anaphoric and action.marker == "after" and action.verb in _PICK_VERBS
                 and current is not None and obj == current.object and not action.earlier):
             return current, []  # 'place X on Y after picking it up': the placement picks it
-        objects = [self.conjunct(np, chain, action, domain) for np, chain in action.earlier]
+        objects = [self.conjunct(np, chain) for np, chain in action.earlier]
         # 'pick up X before placing it on Y' is one placement, like 'pick up X and place it'
         continues = (anaphoric and current is not None and current.kind == "hold"
                      and obj == current.object and toward is None
@@ -311,8 +310,7 @@ class Semantics:
                 self.set_arm(draft, action.lead_arm)
         return current, started
 
-    def conjunct(self, np: NP | It, chain: list[Link], action: Action,
-                 domain: lf.Ref | None) -> lf.Ref:
+    def conjunct(self, np: NP | It, chain: list[Link]) -> lf.Ref:
         """An object named before the last one in 'A and B': described by its own words."""
         if isinstance(np, It) or np.det == "that":
             raise self.fail(np.column, "name each object of 'A and B' in full")
@@ -320,7 +318,7 @@ class Semantics:
         for m in meanings:
             if m.kind not in ("relation", "source", "extreme", "constraint", "noun"):
                 raise self.fail(m.column, "say where to put the objects after the last one")
-        return self.describe(np, meanings, domain)
+        return self.describe(np, meanings)
 
     def split_chain(self, action: Action, meanings: list[Meaning]):
         """Split a chain into (object modifiers, destination, push target, route links)."""
@@ -472,13 +470,13 @@ class Semantics:
             return lf.OrdinalIs(rank=premod.rank, side=premod.value)
         return lf.NotKind(noun=premod.value)
 
-    def describe(self, np: NP, meanings: list[Meaning], domain: lf.Ref | None = None) -> lf.Ref:
+    def describe(self, np: NP, meanings: list[Meaning]) -> lf.Ref:
         """A noun phrase plus the chain links that describe it."""
         if np.det == "that":
             raise self.fail(np.column, "'that <noun>' refers back to an object; none is "
                                        "mentioned before it")
         constraints = [self.premod(p) for p in np.premods]
-        domain = domain or self.domain
+        domain = self.domain
         if np.head == "one" and domain is not None:
             constraints.extend(domain.constraints)
         try:
