@@ -382,9 +382,11 @@ def test_suggestions_keep_the_word_class_the_grammar_expects():
     assert "to" not in caught.value.suggestions
 
 
-def test_no_unsupported_word_is_in_the_vocabulary():
-    from robofollow.compiler.coverage import unsupported_words
+def test_no_unsupported_word_is_in_the_vocabulary_or_listed_twice():
+    from robofollow.compiler.coverage import _UNSUPPORTED, unsupported_words
     assert not unsupported_words() & set(VOCABULARY)
+    listed = [word for _, words in _UNSUPPORTED for word in words]
+    assert len(listed) == len(set(listed))
 
 
 # --------------------------------------------------------------------- L2 / L3 wordings

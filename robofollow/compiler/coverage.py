@@ -103,7 +103,7 @@ _UNSUPPORTED: tuple[tuple[Construct, tuple[str, ...]], ...] = (
       "along-side", "alongside", "within", "beyond", "past", "up-side")),
     (Construct("degrees of a relation", "the relation itself: 'behind "
                "X', 'to the right of X'"),
-     ("directly", "just", "right-hand", "slightly", "exactly", "immediately", "straight")),
+     ("directly", "just", "right-hand", "slightly", "straight")),
 )
 
 _GRAMMAR_WORDS = frozenset({"is", "are", "not", "and", "the", "a", "an", "of", "to", "it"})
