@@ -12,7 +12,7 @@ to the left of the green ball").
 
 from __future__ import annotations
 
-from typing import Annotated, Literal, Union
+from typing import Annotated, Literal, Union, get_args
 
 from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, field_validator
 
@@ -267,6 +267,9 @@ def to_json(lf: Instruction, indent: int | None = None) -> str:
     return lf.model_dump_json(indent=indent)
 
 
+_CONSTRAINT_TYPES = get_args(get_args(Constraint)[0])  # the members of the Constraint union
+
+
 def constructs(node) -> set[str]:
     """The kinds of description a form uses: constraint types, and 'relation:<name>' for each
     relation (what a wording generator may reuse)."""
@@ -277,9 +280,7 @@ def constructs(node) -> set[str]:
     elif isinstance(node, BaseModel):
         if isinstance(node, Related):
             found.add(f"relation:{node.relation}")
-        if hasattr(node, "type") and isinstance(node, (ColorIs, SizeIs, ExtremeIs, NotKind,
-                                                        Related, Between, NearestIs, OrdinalIs,
-                                                        MiddleIs)):
+        if isinstance(node, _CONSTRAINT_TYPES):
             found.add(node.type)
         for name in type(node).model_fields:
             found |= constructs(getattr(node, name))
