@@ -490,8 +490,12 @@ def cmd_serve(args) -> int:
     server = server_class(compile_specs(specs_of(args)), args.policy, limits)
 
     def listening(_) -> None:  # only now can a client connect
-        print(f"serving {args.policy} on {scheme}://{args.host}:{args.port} (Ctrl-C stops)",
-              flush=True)
+        print(f"serving {args.policy} on {scheme}://{args.host}:{args.port} (Ctrl-C stops; "
+              f"health check: http://{args.host}:{args.port}/healthz)", flush=True)
+        if "privileged" in server.pool.uses:
+            print(f"note: {args.policy} is a reference policy reading privileged observations: "
+                  "only `robofollow eval --allow-privileged` clients can drive it; other "
+                  "clients (openpi's) get an error reply saying so", file=sys.stderr, flush=True)
 
     try:
         server.serve_forever(args.host, args.port, ready=listening)

@@ -7,10 +7,10 @@ A policy is any object with
     act(observation) -> [T, 14]   # the next chunk of absolute joint targets
 
 The observation is a dict: "state" (float32 [14]), "instruction" (str), "step" (int, control
-steps executed so far), and, only when the policy uses them, "images" ({cam_high,
-cam_left_wrist, cam_right_wrist}: (H, W, 3) uint8) and "privileged" (a Privileged view of the
-simulation, for the reference policies). Rendering only what a policy uses keeps image-free
-policies fast.
+steps executed so far; a served policy sees it only when its client sends it), and, only when
+the policy uses them, "images" ({cam_high, cam_left_wrist, cam_right_wrist}: (H, W, 3) uint8)
+and "privileged" (a Privileged view of the simulation, for the reference policies). Rendering
+only what a policy uses keeps image-free policies fast.
 """
 
 from __future__ import annotations

@@ -7,7 +7,13 @@ Servers listen on 127.0.0.1 unless told otherwise, serve each connection in its 
 with its own policy instance (a pool of at most `max_clients`, reused by later connections),
 close a connection idle for `idle_timeout` seconds, refuse messages over `max_message` bytes
 and answer a failed request with its error message only: the traceback goes to the server's
-log (stderr), never to the client."""
+log (stderr), never to the client.
+
+A policy is reset when a connection takes it, when a RoboFollow client says an episode begins
+and when an observation's "step" is 0 after the policy has acted (openpi's clients send no
+episode boundary: they may send "step", or open a connection per episode). Observations are
+checked against the layout the server declares in its metadata (`observation_layout`) and
+refused with an error reply that says what was expected."""
 
 from __future__ import annotations
 
@@ -20,8 +26,9 @@ import numpy as np
 from robofollow.build import Compiled
 from robofollow.errors import RoboFollowError
 from robofollow.eval.loading import load_policy
-from robofollow.eval.policy import Privileged, server_text
+from robofollow.eval.policy import ACTION_WIDTH, Privileged, server_text
 from robofollow.eval.wire import MAX_MESSAGE_BYTES
+from robofollow.sim.cameras import CAMERA_NAMES, IMAGE_HEIGHT, IMAGE_WIDTH
 from robofollow.sim.stage import Stage
 
 DEFAULT_HOST = "127.0.0.1"  # this machine only; 0.0.0.0 exposes a server to the network
@@ -52,52 +59,110 @@ class ServerLimits:
             raise ValueError("server limits must be positive")
 
 
+def image_shape(channels_first: bool) -> list[int]:
+    """The shape of a camera image on the wire: [3, H, W] (openpi) or [H, W, 3] (upstream)."""
+    return [3, IMAGE_HEIGHT, IMAGE_WIDTH] if channels_first else [IMAGE_HEIGHT, IMAGE_WIDTH, 3]
+
+
+def observation_layout(uses: frozenset, channels_first: bool) -> dict:
+    """The observation a server's policy reads, as declared in its metadata."""
+    layout = {"state": {"dtype": "float32", "shape": [ACTION_WIDTH]},
+              "instruction": {"dtype": "str"}, "step": {"dtype": "int", "optional": True}}
+    if "images" in uses:
+        layout["images"] = {camera: {"dtype": "uint8", "shape": image_shape(channels_first)}
+                            for camera in CAMERA_NAMES}
+    return layout
+
+
+def _shape_text(value) -> str:
+    return f"{value.dtype} {list(value.shape)}" if isinstance(value, np.ndarray) else \
+        f"a {type(value).__name__}"
+
+
+def checked_images(images, channels_first: bool, names: dict[str, str] | None = None,
+                   where: str = "'images'") -> dict[str, np.ndarray]:
+    """The three cameras' images as (H, W, 3) uint8, from a message's {camera: array} in the
+    protocol's layout (`names`: the protocol's name of each camera; `where`: the message part
+    holding them); RequestError says what was expected where an image is missing or of
+    another shape or type (channels in the other place, a batch axis, floats...)."""
+    names = names or {camera: camera for camera in CAMERA_NAMES}
+    if not isinstance(images, dict):
+        raise RequestError(f"{where} must map {', '.join(names.values())} to images")
+    expected = image_shape(channels_first)
+    order = "channels first, openpi's convention" if channels_first else \
+        "height, width, channels: upstream's convention"
+    checked = {}
+    for camera in CAMERA_NAMES:
+        image = images.get(camera)
+        if image is None:
+            raise RequestError(f"{where} has no {names[camera]!r} (the policy reads "
+                               f"{', '.join(names.values())})")
+        if not (isinstance(image, np.ndarray) and image.dtype == np.uint8
+                and list(image.shape) == expected):
+            raise RequestError(f"image {names[camera]!r} must be uint8 {expected} ({order}); "
+                               f"got {_shape_text(image)}")
+        checked[camera] = np.ascontiguousarray(image.transpose(1, 2, 0)) if channels_first \
+            else image
+    return checked
+
+
 class ServedPolicy:
+    """One policy instance behind a server, with the observation checks and episode
+    boundaries of the serving protocol."""
+
     def __init__(self, compiled: Compiled, policy_spec: str):
         self.compiled, self.policy, self.spec = compiled, load_policy(policy_spec), policy_spec
         self.stage = Stage()
         self.start: tuple | None = None
         self.privileged: Privileged | None = None
+        self.acted = False  # since the last reset
 
-    @property
-    def metadata(self) -> dict:
-        """What a RoboFollow client learns of the server: version and the parts used."""
-        return {"robofollow": {"version": version("robofollow"),
-                               "uses": sorted(self.policy.uses)}, "policy": self.spec}
+    def metadata(self, channels_first: bool) -> dict:
+        """What a client learns of the server: version, the parts used and their layout."""
+        return {"robofollow": {
+            "version": version("robofollow"), "uses": sorted(self.policy.uses),
+            "observation": observation_layout(self.policy.uses, channels_first)},
+            "policy": self.spec}
 
     def reset(self) -> None:
         self.policy.reset()
-        self.start = None
+        self.start, self.acted = None, False
 
     def act(self, state, instruction: str, images: dict | None, privileged: dict | None,
-            step: int = 0) -> np.ndarray:
-        """`images`: {camera: (H, W, 3) uint8}; `privileged`: {scene, layout, seed}."""
-        try:
-            state = np.asarray(state)
-        except (TypeError, ValueError):
-            raise RequestError("'state' is not numbers") from None
-        if state.dtype.kind not in "fiu":
-            raise RequestError("'state' is not numbers")
-        state = state.astype(np.float32)
-        if state.shape != (14,):
-            raise RequestError(f"'state' must be 14 numbers, got shape {list(state.shape)}")
+            step: int | None = None) -> np.ndarray:
+        """`images`: {camera: (H, W, 3) uint8}, checked (`checked_images`); `privileged`:
+        {scene, layout, seed}; `step`: control steps executed so far, None when the client
+        does not say (a step of 0 begins a new episode)."""
+        state = _checked_state(state)
         if not isinstance(instruction, str):
-            raise RequestError("the instruction is not a string")
-        if not isinstance(step, int) or isinstance(step, bool):
-            raise RequestError("'step' is not an integer")
-        obs = {"state": state, "instruction": instruction, "step": step}
-        if images is not None:
+            raise RequestError("the instruction ('prompt') must be a string")
+        if step is not None and (not isinstance(step, int) or isinstance(step, bool)
+                                 or step < 0):
+            raise RequestError("'step' must be a whole number of control steps")
+        if step == 0 and self.acted:  # a new episode on the same connection
+            self.reset()
+        obs = {"state": state, "instruction": instruction}
+        if step is not None:
+            obs["step"] = step
+        if "images" in self.policy.uses:
+            if images is None:
+                raise RequestError(f"policy {self.spec!r} reads the camera images and the "
+                                   "observation has none")
             obs["images"] = images
         if "privileged" in self.policy.uses:
             if privileged is None:
                 raise RequestError(
-                    f"policy {self.spec!r} needs privileged observations (the episode's scene, "
-                    "layout and seed) and the client sent none: evaluate it with "
-                    "`robofollow eval --allow-privileged`")
+                    f"policy {self.spec!r} is a reference policy that reads privileged "
+                    "observations (the episode's scene, layout and seed, to rebuild the "
+                    "simulation's ground truth); only a RoboFollow client sends them, with "
+                    "`robofollow eval --allow-privileged`. Other clients (openpi's) cannot "
+                    "drive it: serve a policy that reads state, instruction and images")
             obs["privileged"] = self._privileged(privileged)
+        self.acted = True
         return np.asarray(self.policy.act(obs), dtype=np.float32)
 
     def _privileged(self, message) -> Privileged:
+        """The episode's start, rebuilt when {scene, layout, seed} changes."""
         if not isinstance(message, dict):
             raise RequestError("'privileged' must be {scene, layout, seed}")
         start = (message.get("scene"), message.get("layout"), message.get("seed"))
@@ -124,6 +189,19 @@ class ServedPolicy:
         self.stage.close()
 
 
+def _checked_state(state) -> np.ndarray:
+    try:
+        state = np.asarray(state)
+    except (TypeError, ValueError):
+        raise RequestError("'state' is not numbers") from None
+    if state.dtype.kind not in "fiu":
+        raise RequestError("'state' is not numbers")
+    if state.shape != (ACTION_WIDTH,):
+        raise RequestError(f"'state' must be {ACTION_WIDTH} numbers (shape [{ACTION_WIDTH}], "
+                           f"no batch axis), got shape {list(state.shape)}")
+    return state.astype(np.float32)
+
+
 class PolicyPool:
     """Policy instances for concurrent connections: one is loaded now (a bad --policy fails
     before the server listens), more as connections need them, at most `size`; a
@@ -133,13 +211,15 @@ class PolicyPool:
         self.compiled, self.spec, self.size = compiled, policy_spec, size
         self.idle = [ServedPolicy(compiled, policy_spec)]
         self.metadata = self.idle[0].metadata  # the same for every instance
+        self.uses = self.idle[0].policy.uses
         self.count = 1
         self.lock = threading.Lock()
 
     def acquire(self) -> ServedPolicy:
+        """An instance for a new connection, as at an episode's start."""
         with self.lock:
             if self.idle:
-                return self.idle.pop()
+                return self.idle.pop()  # reset on release
             if self.count >= self.size:
                 raise ServerBusyError(f"the server is serving its limit of {self.size} "
                                       "clients; try again later")

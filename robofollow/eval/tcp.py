@@ -14,10 +14,16 @@ in its own thread with its own policy instance. Its error replies carry the erro
 end's limit (`robofollow.eval.wire.MAX_MESSAGE_BYTES` unless configured) is refused unread: the
 server answers with an error and closes the connection, the client fails the call.
 
+The server also answers an HTTP `GET /healthz` on its port with 200, checks each predict
+observation against the layout it declares on reset ("robofollow": {"observation": ...}), and
+resets its policy for each connection.
+
 Extensions only between RoboFollow ends: the server answers reset with {"robofollow":
-{version, uses}} (upstream servers answer None), and then the client sends only the parts the
-policy uses, with "privileged" = {scene, layout, seed} in a reference policy's predict
-observations where the user allowed it (`robofollow eval --allow-privileged`).
+{version, uses, observation}} (upstream servers answer None), and then the client sends only
+the parts the policy uses, "step" (control steps executed so far) in each predict observation,
+and "privileged" = {scene, layout, seed} in a reference policy's predict observations where
+the user allowed it (`robofollow eval --allow-privileged`). Any client may send "step"; a step
+of 0 after others begins a new episode.
 """
 
 from __future__ import annotations
@@ -45,6 +51,7 @@ from robofollow.eval.serving import (
     RequestError,
     ServerBusyError,
     ServerLimits,
+    checked_images,
     error_reply,
     log,
     privileged_message,
@@ -148,6 +155,7 @@ class TcpPolicy:
         self.address, self.timeout, self.retries = (host, port), timeout, retries
         self.max_message, self.allow_privileged = max_message, privileged
         self.uses = UPSTREAM_USES
+        self.robofollow = False  # whether the server is RoboFollow's (said on reset)
         self.connection: socket.socket | None = None
         self.instruction: str | None = None
 
@@ -192,6 +200,7 @@ class TcpPolicy:
 
     def reset(self) -> None:
         reply = self._call("reset")
+        self.robofollow = isinstance(reply, dict) and "robofollow" in reply
         try:
             self.uses = declared_uses(reply, UPSTREAM_USES, self.uri, self.allow_privileged)
         except PolicyServerError:
@@ -207,6 +216,8 @@ class TcpPolicy:
                                for name, image in observation.get("images", {}).items()},
                "joint_action": {"vector": np.asarray(observation["state"], dtype=np.float64)},
                "instruction": observation["instruction"]}
+        if self.robofollow and "step" in observation:
+            obs["step"] = int(observation["step"])
         if "privileged" in observation and self.allow_privileged:
             obs["privileged"] = privileged_message(observation["privileged"])
         return self._call("predict", obs)  # checked by the episode (validate_actions)
@@ -233,6 +244,24 @@ def _drain(connection: socket.socket, limit: int = 2 ** 20, seconds: float = 1.0
         pass
 
 
+HTTP_REQUEST_LIMIT = 8192  # bytes of an HTTP request's head read for a health check
+
+
+def _answer_http(connection: socket.socket) -> None:
+    """A health check on the server's port: `GET /healthz` is 200, any other path 404."""
+    head = b""
+    while b"\r\n\r\n" not in head and len(head) < HTTP_REQUEST_LIMIT:
+        chunk = connection.recv(HTTP_REQUEST_LIMIT - len(head))
+        if not chunk:
+            break
+        head += chunk
+    path = head.split(b"\r\n", 1)[0].split(b" ")[1:2]
+    status, body = ("200 OK", b"OK\n") if path == [b"/healthz"] else \
+        ("404 Not Found", b"this port speaks RoboFollow's TCP protocol; GET /healthz checks it\n")
+    connection.sendall(f"HTTP/1.1 {status}\r\nContent-Type: text/plain\r\nContent-Length: "
+                       f"{len(body)}\r\nConnection: close\r\n\r\n".encode() + body)
+
+
 class _Session:
     """One connection's state: its policy instance and the instruction last set."""
 
@@ -251,7 +280,7 @@ class _Session:
         if command == "reset":
             self.served.reset()
             self.instruction = ""
-            return self.served.metadata
+            return self.served.metadata(channels_first=False)
         if command == "set_instruction":
             if not isinstance(obs, str):
                 raise RequestError("set_instruction's obs must be the instruction string")
@@ -262,15 +291,17 @@ class _Session:
                                "{'vector'}, 'instruction'}")
         cameras = obs.get("observation") or {}
         if not isinstance(cameras, dict) or not all(
-                isinstance(cameras[key], dict) and isinstance(cameras[key].get("rgb"),
-                                                              np.ndarray)
-                for key in CAMERAS.values() if key in cameras):
-            raise RequestError("predict's 'observation' must map cameras to {'rgb': array}")
-        images = {name: cameras[key]["rgb"] for name, key in CAMERAS.items()
+                isinstance(cameras[key], dict) for key in CAMERAS.values() if key in cameras):
+            raise RequestError("predict's 'observation' must map head_camera, left_camera and "
+                               "right_camera to {'rgb': array}")
+        images = {name: cameras[key].get("rgb") for name, key in CAMERAS.items()
                   if key in cameras} or None
+        if images is not None and "images" in self.pool.uses:
+            images = checked_images(images, channels_first=False, names=CAMERAS,
+                                    where="predict's 'observation'")
         return self.served.act(obs["joint_action"].get("vector"),
                                obs.get("instruction", self.instruction), images,
-                               obs.get("privileged"))
+                               obs.get("privileged"), obs.get("step"))
 
     def close(self) -> None:
         if self.served is not None:
@@ -290,11 +321,15 @@ class TcpPolicyServer:
 
     def handle(self, connection: socket.socket, peer="client") -> None:
         """Answer one connection's requests until it closes, idles past the time-out, sends
-        a message over the limit or bytes that are not the protocol."""
+        a message over the limit or bytes that are not the protocol; or, for an HTTP
+        request, its health check."""
         session = _Session(self.pool)
         with connection:
             connection.settimeout(self.limits.idle_timeout)
             try:
+                if connection.recv(4, socket.MSG_PEEK | socket.MSG_WAITALL) == b"GET ":
+                    _answer_http(connection)
+                    return
                 while not self.stopped.is_set():
                     try:
                         request = receive_message(connection, self.limits.max_message)

@@ -11,15 +11,22 @@ log). Either end closes the connection (code 1009) on a message over its size li
 (`robofollow.eval.wire.MAX_MESSAGE_BYTES` unless configured); the client then fails the call
 with the reason, without retrying.
 
+`robofollow serve` also answers `GET /healthz` with 200 (as openpi's server does), checks each
+observation against the layout its metadata declares ("robofollow": {"observation": ...}),
+and resets its policy for each connection.
+
 Extensions only between RoboFollow ends (an openpi server never sees them): a server whose
-metadata carries "robofollow" accepts {"reset": true} at an episode start, declares the
-observation parts its policy uses, and for a privileged (reference) policy receives
-"privileged" = {scene, layout, seed}, from which it rebuilds the same start state itself,
-where the user allowed it (`robofollow eval --allow-privileged`).
+metadata carries "robofollow" accepts {"reset": true} at an episode start, receives "step"
+(control steps executed so far) with each observation, declares the observation parts its
+policy uses, and for a privileged (reference) policy receives "privileged" = {scene, layout,
+seed}, from which it rebuilds the same start state itself, where the user allowed it
+(`robofollow eval --allow-privileged`). Any client may send "step"; a step of 0 after others
+begins a new episode.
 """
 
 from __future__ import annotations
 
+import http
 from contextlib import ExitStack
 
 import numpy as np
@@ -40,12 +47,12 @@ from robofollow.eval.serving import (
     PolicyPool,
     RequestError,
     ServerLimits,
+    checked_images,
     error_reply,
     log,
     privileged_message,
 )
 from robofollow.eval.wire import MAX_MESSAGE_BYTES, WireError, packb, size_text, unpackb
-from robofollow.sim.cameras import CAMERA_NAMES
 
 OPENPI_USES = frozenset({"state", "instruction", "images"})
 
@@ -159,6 +166,8 @@ class WebsocketPolicy:
     def act(self, observation: dict) -> np.ndarray:
         message = {"state": np.asarray(observation["state"], dtype=np.float32),
                    "prompt": observation.get("instruction", "")}
+        if "robofollow" in self.metadata and "step" in observation:
+            message["step"] = int(observation["step"])
         if "images" in observation:
             message["images"] = {camera: np.ascontiguousarray(image.transpose(2, 0, 1))
                                  for camera, image in observation["images"].items()}
@@ -176,16 +185,11 @@ class WebsocketPolicy:
             self.connection = None
 
 
-def _images(message: dict) -> dict | None:
-    if "images" not in message:
-        return None
-    images = message["images"]
-    if not isinstance(images, dict) or not all(
-            isinstance(images[camera], np.ndarray) and images[camera].ndim == 3
-            for camera in CAMERA_NAMES if camera in images):
-        raise RequestError("'images' must map cameras to [3, H, W] arrays")
-    return {camera: np.ascontiguousarray(images[camera].transpose(1, 2, 0))
-            for camera in CAMERA_NAMES if camera in images}
+def _health(connection, request):
+    """`GET /healthz` is answered 200 without a websocket handshake; other paths go on."""
+    if request.path == "/healthz":
+        return connection.respond(http.HTTPStatus.OK, "OK\n")
+    return None
 
 
 class PolicyServer:
@@ -206,7 +210,7 @@ class PolicyServer:
             self._fail(connection, error_reply(error, peer))
             return
         try:
-            connection.send(packb(self.pool.metadata))
+            connection.send(packb(self.pool.metadata(channels_first=True)))
             while True:
                 try:
                     data = connection.recv(timeout=self.limits.idle_timeout)
@@ -224,9 +228,11 @@ class PolicyServer:
                         continue
                     if "state" not in message:
                         raise RequestError("the observation has no 'state'")
-                    actions = served.act(message["state"], message.get("prompt", ""),
-                                         _images(message), message.get("privileged"),
-                                         message.get("step", 0))
+                    images = message.get("images")
+                    if images is not None and "images" in self.pool.uses:
+                        images = checked_images(images, channels_first=True)
+                    actions = served.act(message["state"], message.get("prompt", ""), images,
+                                         message.get("privileged"), message.get("step"))
                     reply = packb({"actions": actions})
                 except Exception as error:  # openpi's way: a text message, then close
                     if isinstance(error, WireError):
@@ -251,7 +257,8 @@ class PolicyServer:
 
     def serve_forever(self, host: str = DEFAULT_HOST, port: int = 0, ready=None) -> None:
         with serve(self.handle, host, port, compression=None, max_size=self.limits.max_message,
-                   open_timeout=min(10.0, self.limits.idle_timeout)) as server:
+                   open_timeout=min(10.0, self.limits.idle_timeout),
+                   process_request=_health) as server:
             self.server = server
             if ready is not None:
                 ready(server)

@@ -9,6 +9,7 @@ from robofollow.errors import RoboFollowError
 from robofollow.sim.simulation import Simulation
 
 CAMERA_NAMES = ("cam_high", "cam_left_wrist", "cam_right_wrist")
+IMAGE_WIDTH, IMAGE_HEIGHT = 320, 240  # what an evaluation renders (datasets may differ)
 
 
 class RenderingError(RoboFollowError):
@@ -18,7 +19,8 @@ class RenderingError(RoboFollowError):
 class Cameras:
     """One mujoco.Renderer per simulation; close() it (or use `with`) when done."""
 
-    def __init__(self, sim: Simulation, width: int = 320, height: int = 240):
+    def __init__(self, sim: Simulation, width: int = IMAGE_WIDTH,
+                 height: int = IMAGE_HEIGHT):
         self.sim, self.width, self.height = sim, width, height
         try:
             self.renderer = mujoco.Renderer(sim.model, height, width)

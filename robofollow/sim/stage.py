@@ -4,14 +4,14 @@ building a model and a renderer costs far more than resetting them."""
 from __future__ import annotations
 
 from robofollow.compiler.spec import Scene
-from robofollow.sim.cameras import Cameras
+from robofollow.sim.cameras import IMAGE_HEIGHT, IMAGE_WIDTH, Cameras
 from robofollow.sim.simulation import Simulation
 
 
 class Stage:
     """Close it (or use `with`) when done: the renderer holds an OpenGL context."""
 
-    def __init__(self, width: int = 320, height: int = 240):
+    def __init__(self, width: int = IMAGE_WIDTH, height: int = IMAGE_HEIGHT):
         self.width, self.height = width, height
         self.sim: Simulation | None = None
         self.cameras: Cameras | None = None
