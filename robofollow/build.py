@@ -132,10 +132,15 @@ def find_episode(compiled: Compiled, episode_id: str) -> dict:
             for record in episodes(compiled, task):
                 if record["episode"] == episode_id:
                     return record
-    close = difflib.get_close_matches(task_id, [t.id for t in compiled.splits.tasks], n=3)
+    raise unknown_episode(episode_id, [t.id for t in compiled.splits.tasks])
+
+
+def unknown_episode(episode_id: str, task_ids: list[str]) -> UnknownEpisodeError:
+    """The error for an episode id the benchmark lacks, with the nearest task ids."""
+    close = difflib.get_close_matches(episode_id.partition("#")[0], task_ids, n=3)
     hint = f"; did you mean {', '.join(c + '#r1' for c in close)}?" if close else ""
-    raise UnknownEpisodeError(f"no episode {episode_id!r} in the compiled benchmark (ids look "
-                              f"like scene1/L0/pickup_yellow_block_2#r1){hint}")
+    return UnknownEpisodeError(f"no episode {episode_id!r} in the compiled benchmark (ids look "
+                               f"like scene1/L0/pickup_yellow_block_2#r1){hint}")
 
 
 def summary(compiled: Compiled, changes: str = "") -> str:

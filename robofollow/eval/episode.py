@@ -59,6 +59,49 @@ def _failure(failure: BaseException) -> str:
     return f"the policy raised {type(failure).__name__}: {failure}"
 
 
+class Rollout:
+    """An episode in progress: its layout reset with its seed, the recording from the home
+    pose, and the chunks executed so far within the budget (`done` once it is spent)."""
+
+    def __init__(self, compiled: Compiled, stage: Stage, episode: dict, render: bool,
+                 budget: int = ACTION_BUDGET, on_frame=None):
+        self.compiled, self.stage, self.episode = compiled, stage, episode
+        self.budget, self.on_frame = budget, on_frame
+        self.scene = compiled.spec.scenes[episode["scene"]]
+        self.sim = stage.simulation(self.scene, episode["layout"], render=render)
+        self.world = self.sim.reset(episode["seed"])
+        self.recorder = Recorder(self.sim,
+                                 {k: episode[k] for k in ("episode", "scene", "layout", "seed")})
+        self.steps = self.queries = self.clipped = 0
+        self._record(robot.home_state())
+
+    @property
+    def done(self) -> bool:
+        return self.steps >= self.budget
+
+    def _record(self, action: np.ndarray) -> None:
+        self.recorder.frame(action)
+        if self.on_frame is not None:
+            self.on_frame(self.stage)
+
+    def execute(self, chunk: np.ndarray, past: np.ndarray) -> None:
+        """Run at most CHUNK_LIMIT actions of a validated chunk (`validate_actions`), within
+        the budget."""
+        executed = min(CHUNK_LIMIT, self.budget - self.steps, len(chunk))
+        self.clipped += int(past[:executed].sum())
+        for action in chunk[:executed]:
+            self.sim.step(action)
+            self._record(action)
+            self.steps += 1
+
+    def finish(self, error: str | None, began: float) -> EpisodeRun:
+        """The recording scored by the oracle; `began`: perf_counter at the episode's start."""
+        trajectory = self.recorder.trajectory()
+        return EpisodeRun(score_recording(self.compiled, self.episode, trajectory), trajectory,
+                          self.steps, self.queries, self.clipped, error,
+                          time.perf_counter() - began)
+
+
 def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy | None,
                 instruction: str | None = None, budget: int = ACTION_BUDGET,
                 on_frame=None, timeout: float | None = None,
@@ -80,25 +123,15 @@ def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy 
         except BaseException as failure:  # noqa: B036 (e.g. its server is gone, SystemExit)
             error = f"reset: {_failure(failure)}"  # the episode is scored as it stands
     uses = policy.uses if policy is not None else frozenset()
-    scene = compiled.spec.scenes[episode["scene"]]
-    render = "images" in uses or on_frame is not None
-    sim = stage.simulation(scene, episode["layout"], render=render)
-    world = sim.reset(episode["seed"])
-    recorder = Recorder(sim, {k: episode[k] for k in ("episode", "scene", "layout", "seed")})
-
-    def record(action: np.ndarray) -> None:
-        recorder.frame(action)
-        if on_frame is not None:
-            on_frame(stage)
-
-    record(robot.home_state())
-    privileged = (Privileged(sim, world, scene, compiled.candidates(scene.id), episode["seed"])
+    rollout = Rollout(compiled, stage, episode, "images" in uses or on_frame is not None,
+                      budget, on_frame)
+    privileged = (Privileged(rollout.sim, rollout.world, rollout.scene,
+                             compiled.candidates(rollout.scene.id), episode["seed"])
                   if "privileged" in uses else None)
     text = episode["instruction"] if instruction is None else instruction
-    steps = queries = clipped = 0
-    while error is None and steps < budget:
-        queries += 1
-        seen = observation(policy, stage, text, steps, privileged)
+    while error is None and not rollout.done:
+        rollout.queries += 1
+        seen = observation(policy, stage, text, rollout.steps, privileged)
         try:
             with deadline(timeout):
                 answer = policy.act(seen)
@@ -106,15 +139,7 @@ def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy 
         except KeyboardInterrupt:
             raise
         except BaseException as failure:  # noqa: B036 (a policy bug or exit ends its episode,
-            error = f"step {steps}: {_failure(failure)}"  # not the evaluation)
+            error = f"step {rollout.steps}: {_failure(failure)}"  # not the evaluation)
             break
-        executed = min(CHUNK_LIMIT, budget - steps, len(chunk))
-        clipped += int(past[:executed].sum())
-        for action in chunk[:executed]:
-            sim.step(action)
-            record(action)
-            steps += 1
-    trajectory = recorder.trajectory()
-    result = score_recording(compiled, episode, trajectory)
-    return EpisodeRun(result, trajectory, steps, queries, clipped, error,
-                      time.perf_counter() - began)
+        rollout.execute(chunk, past)
+    return rollout.finish(error, began)

@@ -1,12 +1,16 @@
 """A Gymnasium 1.x environment over the compiled benchmark's episodes.
 
-    env = RoboFollowEnv()                       # the built-in specs, first episode
+    env = RoboFollowEnv()                       # the built-in specs, every episode
     obs, info = env.reset(options={"episode": "scene2/L0/pickup_left_cube#r1"})
+    env = gymnasium.make("RoboFollow-Scene2-v0", level="L1")   # see robofollow.sim.registration
     obs, reward, terminated, truncated, info = env.step(action)   # 14-D joint targets
 
 Observation: {"images": {cam_high, cam_left_wrist, cam_right_wrist} (H, W, 3) uint8,
 "state": 14-D joints (grippers normalised, 1 open), "instruction": the episode's text}.
-The episode fixes layout, instruction and jitter seed; `reset(seed=...)` overrides the seed.
+`reset()` plays the env's `episode`, else one drawn (with the env's seeded generator) from
+the episodes of `scene` and `level` (None: all). The episode fixes layout, instruction and
+jitter seed; `reset(seed=...)` overrides the seed. The compiled benchmark comes from the on-disk
+cache (robofollow.compiled_cache), so an env starts without compiling the specs.
 Reward is always 0 and nothing terminates early: the oracle scores the recorded trajectory
 (`env.trajectory()`), as the benchmark's protocol runs a fixed action budget. Targets past a
 joint limit are clipped to it; `info["clipped"]` counts the actions that had one.
@@ -21,16 +25,15 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from robofollow.build import all_episodes, compile_specs, find_episode
+from robofollow import compiled_cache
 from robofollow.resources import builtin_specs
-from robofollow.sim import robot
+from robofollow.sim import MAX_STEPS, robot
 from robofollow.sim.cameras import CAMERA_NAMES, Cameras
 from robofollow.sim.recorder import Recorder
 from robofollow.sim.simulation import CONTROL_HZ, Simulation
 from robofollow.sim.stage import Stage
 from robofollow.trajectory import Trajectory
 
-MAX_STEPS = 500  # control steps before truncation (upstream's 10 chunks x 50 actions)
 INSTRUCTION_CHARSET = frozenset(string.printable) - frozenset("\t\n\r\x0b\x0c")
 
 
@@ -39,9 +42,11 @@ class RoboFollowEnv(gym.Env):
 
     def __init__(self, episode: str | dict | None = None, specs: str | Path | None = None,
                  width: int = 320, height: int = 240, max_steps: int = MAX_STEPS,
-                 render_mode: str | None = "rgb_array"):
-        self.compiled = compile_specs(Path(specs) if specs else builtin_specs())
-        self.default_episode = self._episode(episode) if episode else all_episodes(self.compiled)[0]
+                 render_mode: str | None = "rgb_array", scene: str | None = None,
+                 level: str | None = None):
+        self.benchmark = compiled_cache.load(Path(specs) if specs else builtin_specs())
+        self.choices = self.benchmark.select(scene, level)  # what reset() draws from
+        self.default_episode = self._episode(episode) if episode else None
         self.width, self.height, self.max_steps = width, height, max_steps
         self.render_mode = render_mode
         image = spaces.Box(0, 255, (height, width, 3), np.uint8)
@@ -56,18 +61,20 @@ class RoboFollowEnv(gym.Env):
                                        robot.ACTION_HIGH.astype(np.float32), dtype=np.float32)
         self.stage = Stage(width, height)  # the current layout's simulation and cameras
         self.recorder: Recorder | None = None
-        self.episode: dict = self.default_episode
+        self.episode: dict | None = self.default_episode
         self.steps = self.clipped = 0  # clipped: actions with a target past a joint limit
         self.command = robot.home_state()
 
     def _episode(self, episode: str | dict) -> dict:
-        return find_episode(self.compiled, episode) if isinstance(episode, str) else episode
+        return self.benchmark.record(episode) if isinstance(episode, str) else episode
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
-        episode = (options or {}).get("episode")
-        self.episode = self._episode(episode) if episode else self.default_episode
-        scene = self.compiled.spec.scenes[self.episode["scene"]]
+        episode = (options or {}).get("episode") or self.default_episode
+        if episode is None:
+            episode = self.choices[self.np_random.integers(len(self.choices))]
+        self.episode = self._episode(episode)
+        scene = self.benchmark.spec.scenes[self.episode["scene"]]
         self.stage.simulation(scene, self.episode["layout"], render=True)
         jitter_seed = self.episode["seed"] if seed is None else seed
         self.sim.reset(jitter_seed)

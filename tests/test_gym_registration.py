@@ -1,0 +1,195 @@
+"""The Gymnasium ids (`gymnasium.make`) and the on-disk cache of the compiled benchmark."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import warnings
+
+import gymnasium
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+from robofollow import compiled_cache
+from robofollow.resources import builtin_specs
+from robofollow.sim import MAX_STEPS
+from robofollow.sim.registration import builtin_scenes, env_ids
+
+# check_env's advice to normalise a Box action space to [-1, 1]: unavoidable, the actions are
+# the benchmark's joint targets (radians, gripper 0-1), as policies, the expert and the
+# recorded datasets give them
+UNAVOIDABLE = ("symmetric and normalized space",)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def cache(tmp_path_factory):
+    """A cache folder of the module's own (the user's cache is not touched)."""
+    folder = tmp_path_factory.mktemp("cache")
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("ROBOFOLLOW_CACHE_DIR", str(folder))
+        patch.delenv("ROBOFOLLOW_NO_CACHE", raising=False)
+        yield folder / "compiled"
+
+
+@pytest.fixture(scope="module")
+def scene1(tmp_path_factory):
+    """A specs folder of one built-in scene (it compiles in a few seconds)."""
+    folder = tmp_path_factory.mktemp("specs")
+    shutil.copy(builtin_specs() / "scene1.rf", folder)
+    return folder
+
+
+def _avoidable(caught: list[warnings.WarningMessage]) -> list[str]:
+    return [str(w.message) for w in caught
+            if not any(text in str(w.message) for text in UNAVOIDABLE)]
+
+
+def test_import_registers_the_ids_without_mujoco_or_the_compiler():
+    code = ("import sys, robofollow, gymnasium; print(sorted(i for i in gymnasium.registry "
+            "if i.startswith('RoboFollow'))); print('mujoco' in sys.modules, "
+            "'robofollow.build' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
+                         text=True).stdout.splitlines()
+    assert out == [str(sorted(env_ids())), "False False"]
+    assert set(env_ids()) == {"RoboFollow-v0", "RoboFollow-Scene1-v0", "RoboFollow-Scene2-v0",
+                              "RoboFollow-Scene3-v0", "RoboFollow-Scene4-v0"}
+
+
+def test_the_registered_scenes_are_the_compiled_ones():
+    assert builtin_scenes() == list(compiled_cache.load(builtin_specs()).spec.scenes)
+
+
+@pytest.mark.parametrize("env_id", sorted(env_ids()))
+def test_make_resets_and_steps_each_id(env_id):
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        env = gymnasium.make(env_id, width=64, height=48)
+        try:
+            obs, info = env.reset(seed=3)
+            assert obs["images"]["cam_high"].shape == (48, 64, 3)
+            assert info["scene"] == env_ids()[env_id].get("scene", info["scene"])
+            obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+            assert (info["step"], reward, terminated, truncated) == (1, 0.0, False, False)
+            assert env.spec.max_episode_steps == MAX_STEPS
+        finally:
+            env.close()
+    assert _avoidable(caught) == []
+
+
+def test_make_passes_its_arguments_to_the_env():
+    env = gymnasium.make("RoboFollow-Scene2-v0", level="L1", width=64, height=48)
+    try:
+        assert {env.reset(seed=seed)[1]["level"] for seed in range(3)} == {"L1"}
+        assert all(e.startswith("scene2/L1/") for e in env.unwrapped.choices)
+        _, info = env.reset(options={"episode": "scene4/L0/s41_l_pick_blue_sphere#r2"})
+        assert info["episode"] == "scene4/L0/s41_l_pick_blue_sphere#r2"
+    finally:
+        env.close()
+    with pytest.raises(ValueError, match="no episodes of scene 'scene9'"):
+        gymnasium.make("RoboFollow-v0", scene="scene9")
+
+
+def test_seeded_resets_draw_the_same_episode():
+    env = gymnasium.make("RoboFollow-v0", width=64, height=48).unwrapped
+    try:
+        first = env.reset(seed=11)[1]["episode"]
+        assert env.reset(seed=11)[1]["episode"] == first
+        assert len({env.reset(seed=seed)[1]["episode"] for seed in range(5)}) > 1
+    finally:
+        env.close()
+
+
+def test_check_env_passes_without_warnings():
+    env = gymnasium.make("RoboFollow-v0", width=64, height=48)
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            check_env(env.unwrapped)
+    finally:
+        env.close()
+    assert _avoidable(caught) == []
+
+
+WARM_START = """
+import json, time
+import robofollow
+from robofollow.sim.env import RoboFollowEnv
+began = time.perf_counter()
+env = RoboFollowEnv()
+env.reset(seed=0)
+print(json.dumps(time.perf_counter() - began))
+env.close()
+"""
+
+
+def test_a_warm_cache_starts_an_env_in_under_a_second(cache):
+    compiled_cache.load(builtin_specs())  # warm (written once for the module)
+    cached = sorted(cache.iterdir())
+    times = []
+    for _ in range(2):  # one retry: the machine may be busy
+        out = subprocess.run([sys.executable, "-c", WARM_START], check=True,
+                             capture_output=True, text=True).stdout
+        times.append(json.loads(out.splitlines()[-1]))
+        if times[-1] < 1.0:
+            break
+    assert min(times) < 1.0, f"construct + reset took {times} s"
+    assert sorted(cache.iterdir()) == cached  # read, not compiled again
+
+
+def test_a_cached_benchmark_is_read_not_compiled(scene1, monkeypatch):
+    compiled = compiled_cache.load(scene1)
+    compiled_cache._load.cache_clear()  # (the per-process memo: read the file this time)
+    monkeypatch.setattr(compiled_cache, "_compile", pytest.fail)
+    read = compiled_cache.load(scene1)
+    assert read.ids == compiled.ids and read.spec == compiled.spec
+    assert read.record(read.ids[-1]) == compiled.record(compiled.ids[-1])
+
+
+def test_a_changed_spec_file_compiles_again(scene1, tmp_path, cache):
+    specs = shutil.copytree(scene1, tmp_path / "specs")
+    before = compiled_cache.load(specs)
+    with open(specs / "scene1.rf", "a", encoding="utf-8") as spec:
+        spec.write("\n# changed\n")
+    key = compiled_cache.key(specs)
+    assert not (cache / f"{key}.jsonl").exists()
+    after = compiled_cache.load(specs)
+    assert (cache / f"{key}.jsonl").is_file()
+    assert after.ids == before.ids
+
+
+@pytest.mark.parametrize("damage", ["truncated", "flipped", "garbage", "empty"])
+def test_a_corrupt_cache_file_is_compiled_again(scene1, cache, damage):
+    expected = compiled_cache.load(scene1)
+    path = cache / f"{compiled_cache.key(scene1)}.jsonl"
+    data = path.read_bytes()
+    damaged = {"truncated": data[:len(data) // 2], "garbage": b"\xff\x00not json\n",
+               "flipped": data[:-100] + bytes([data[-100] ^ 1]) + data[-99:], "empty": b""}
+    path.write_bytes(damaged[damage])
+    compiled_cache._load.cache_clear()
+    loaded = compiled_cache.load(scene1)
+    assert loaded.ids == expected.ids and loaded.spec == expected.spec
+    assert path.read_bytes() == data  # replaced by a good one
+
+
+def test_no_cache_writes_nothing(scene1, monkeypatch, tmp_path):
+    monkeypatch.setenv("ROBOFOLLOW_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.setenv("ROBOFOLLOW_NO_CACHE", "1")
+    assert compiled_cache.cache_dir() is None
+    assert compiled_cache.load(scene1).ids
+    assert not (tmp_path / "cache").exists()
+
+
+def test_the_key_covers_every_module_the_compiler_runs():
+    code = ("import sys, json, robofollow.build; print(json.dumps(sorted(m.__file__ for name, m "
+            "in list(sys.modules.items()) if name.startswith('robofollow'))))")
+    out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
+                         text=True).stdout
+    loaded = {os.path.realpath(file) for file in json.loads(out)}
+    covered = {os.path.realpath(file) for file in compiled_cache.code_files()}
+    package = os.path.dirname(os.path.realpath(compiled_cache.__file__))
+    outside = {os.path.join(package, name) for name in
+               ("__init__.py", "sim/__init__.py", "sim/registration.py")}  # (not the compile)
+    assert loaded - outside <= covered, sorted(loaded - outside - covered)
