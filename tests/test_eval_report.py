@@ -15,14 +15,17 @@ OPTIONS = EvalOptions("mine:make", ("scene2",), ("L0", "L1"), 1, "normal", "none
 
 
 def _record(task: str, level: str, intent: float, execution: float, complete: bool,
-            match: str | None, reason: str = "", error: str | None = None) -> dict:
+            match: str | None, reason: str = "", error: str | None = None,
+            instruction: str = "", layout: str = "default") -> dict:
     stages = [{"stage": "source", "name": "source_grounding", "weight": 0.8,
                "intent": 0.8 * intent, "execution": 0.8 * execution, "first_step": None,
                "reason": reason},
               {"stage": "finish", "name": "finish", "weight": 0.2, "intent": 0.2 * intent,
                "execution": 0.2 * execution, "first_step": None, "reason": ""}]
     return {"episode": f"scene2/{level}/{task}#r1", "scene": "scene2", "level": level,
-            "task": f"scene2/{level}/{task}", "intent_score": intent,
+            "task": f"scene2/{level}/{task}", "layout": layout,
+            "instruction": instruction or f"Use your left arm to {task.replace('_', ' ')}.",
+            "intent_score": intent,
             "execution_score": execution, "complete": complete, "stages": stages,
             "executed_behaviour": {"match": match, "description": "", "behaviour": None,
                                    "intent_score": 0, "execution_score": 0},
@@ -52,14 +55,16 @@ def test_report_data_counts_what_the_policy_did_and_where_it_failed_first():
     data = report_data("mine", OPTIONS, RESULTS)
     assert data["cells"]["scene2"]["L0"]["IS"] == 100.0
     assert data["cells"]["scene2"]["L0"]["ES"] == 50.0
-    assert data["did"]["scene2"]["L1"] == {"as instructed": 0.0,
-                                           "another training behaviour": 50.0,
-                                           "the other branch": 0.0, "unrecognised": 50.0}
-    assert data["confusions"] == [(("pickup_right_cube", "pickup_left_cube"), 1)]
+    assert data["did"]["scene2"]["L1"] == {"completed": 0.0, "as instructed": 0.0,
+                                           "another training task": 50.0,
+                                           "other branch": 0.0, "unrecognised": 50.0}
+    assert data["did"]["scene2"]["L0"]["completed"] == 50.0
+    assert data["confusions"] == [(("scene2/L1/pickup_right_cube", "pickup_left_cube"), 1)]
     [source] = data["first_failures"]
     assert source["stage"] == "source" and source["episodes"] == 3
     assert data["errors"] == [("the policy raised RuntimeError: boom", 1)]
-    assert data["matrices"]["scene2"]["counts"]["pickup_right_cube|pickup_left_cube"] == 1
+    assert data["matrices"]["scene2"]["counts"]["scene2/L1/pickup_right_cube"] == {
+        "pickup_left_cube": 1}
 
 
 def test_the_report_files_show_table_gap_confusions_and_reasons(run):
@@ -67,7 +72,7 @@ def test_the_report_files_show_table_gap_confusions_and_reasons(run):
     text = markdown.read_text()
     assert "| scene2 | 100.0 | 50.0 | 50.0 | 0.0 | 0.0 | 0.0 |" in text
     assert "| scene2 | 50.0 | 0.0 |" in text  # Intent minus Execution, L0 and L1
-    assert "| pickup_right_cube | pickup_left_cube | 1 |" in text
+    assert "| L1 · Use your left arm to pickup right cube. | pickup_left_cube | 1 |" in text
     assert "the cube slipped (1)" in text
     page = html.read_text()
     assert page.startswith("<!doctype html>") and "<h3>scene2</h3>" in page

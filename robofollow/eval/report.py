@@ -1,8 +1,13 @@
 """Reports of an evaluation run (`RUN/report.md`, `RUN/report.html`) and comparisons of two:
 the paper's Table 1 (with an Intent heatmap in HTML), Intent minus Execution per cell, a
-per-task table, what the policy did instead (per cell, the most frequent confusions and, in
-HTML, the instructed x executed matrix per scene), the stages that failed first with their
-most common reasons, and links to failure videos."""
+per-task table, completion beside what the policy did (per cell, the most frequent confusions
+and the instructed x executed matrix per scene), the stages that failed first with their most
+common reasons, and links to failure videos.
+
+Tasks are named by their level and instruction, shortened ("L2 · Use your left arm to pick up
+the cube that…"); the full instruction and the task id are in the markdown's task table and in
+the HTML's tooltips. The instructed x executed matrices are in the HTML only (their behaviour
+headers turned upright, in a scrolling box), where a task's row fits on a screen."""
 
 from __future__ import annotations
 
@@ -29,8 +34,9 @@ _TEMPLATES = jinja2.Environment(
                                         default=False),
     trim_blocks=True, lstrip_blocks=True, undefined=jinja2.StrictUndefined)
 VIDEO_LINK = re.compile(r"videos/[A-Za-z0-9_.#-]+\.mp4")  # what the runner writes
-DID = ("as instructed", "another training behaviour", "the other branch", "unrecognised")
+DID = ("as instructed", "another training task", "other branch", "unrecognised")
 TOP = 15  # confusions and failure reasons listed
+NAME_CHARS = 50  # a task's instruction is shortened to its first words within this many
 
 
 class ReportError(RoboFollowError):
@@ -46,17 +52,85 @@ def load_run(run: Path) -> tuple[EvalOptions, list[dict]]:
     return options, read_results(run / RESULTS)
 
 
-def _short(task: str) -> str:
-    return task.rsplit("/", 1)[-1]
+def _clip(text: str, limit: int = NAME_CHARS) -> str:
+    """The text's first words within `limit` characters, with an ellipsis where it was cut."""
+    if len(text) <= limit:
+        return text
+    cut = text[:limit + 1]
+    return (cut.rsplit(" ", 1)[0] if " " in cut else cut[:limit]) + "…"
+
+
+def task_names(results: list[dict], instructions: dict[str, str]) -> dict[str, str]:
+    """Each task's name in the tables: its level and its instruction (`instructions`, by task),
+    shortened ("L2 · Use your left arm to pick up the cube that…"), else its id. Where shortened
+    instructions coincide, each goes on to the first word that tells it apart ("L0 · Use your
+    right arm to pick up the smaller blue … the green…"); the names that still coincide are
+    told apart by their layout where those differ ("… @scene2_3"), else numbered ("… (2)")."""
+    tasks = {r["task"]: r for r in results}
+    names = {task: f"{r['level']} · " + (_clip(instructions[task]) if task in instructions
+                                          else task.split("/", 2)[-1])
+             for task, r in tasks.items()}
+    for group in _clashes(names):
+        words = {task: instructions[task].split() for task in group if task in instructions}
+        for task, own in words.items():
+            others = [other for other in words.values() if other != own]
+            if others:
+                names[task] = _told_apart(names[task], own, others)
+    for group in _clashes(names):
+        layouts = [tasks[task].get("layout") for task in group]
+        by_layout = len(set(layouts)) == len(group)
+        for number, (task, layout) in enumerate(zip(group, layouts, strict=True), 1):
+            names[task] += f" @{layout}" if by_layout else f" ({number})"
+    return names
+
+
+def _clashes(names: dict[str, str]) -> list[list[str]]:
+    """The groups of keys (in order) that share a name."""
+    groups: dict[str, list[str]] = defaultdict(list)
+    for key in sorted(names):
+        groups[names[key]].append(key)
+    return [group for group in groups.values() if len(group) > 1]
+
+
+def _told_apart(name: str, words: list[str], others: list[list[str]]) -> str:
+    """A shortened name (ending "…") followed by its text's words up to the first that none of
+    the `others` (texts with the same name) has at its place: that word and the one before,
+    the words shown first and those between elided."""
+    end = min(len(words), 1 + max(_shared(words, other) for other in others))
+    shown = len(name.split()) - 2  # the level and the dot are two words
+    start = max(shown, end - 2)
+    return (name.removesuffix("…") + (" … " if start > shown else " ")
+            + " ".join(words[start:end]) + ("…" if end < len(words) else ""))
+
+
+def _shared(words: list[str], other: list[str]) -> int:
+    """How many leading words two texts share."""
+    return next((i for i, (a, b) in enumerate(zip(words, other, strict=False)) if a != b),
+                min(len(words), len(other)))
+
+
+def _outcome(record: dict) -> str:
+    """The behaviour closest to what the arms did: as instructed, the other branch, a
+    training task's label, or unrecognised."""
+    match = (record["executed_behaviour"] or {}).get("match") or None
+    return {"instructed": DID[0], "other branch": DID[2], None: DID[3]}.get(match, match)
 
 
 def _did(record: dict) -> str:
-    match = (record["executed_behaviour"] or {}).get("match")
-    if match == "instructed":
-        return DID[0]
-    if match == "other branch":
-        return DID[2]
-    return DID[1] if match else DID[3]
+    outcome = _outcome(record)
+    return outcome if outcome in DID else DID[1]
+
+
+def _matrix(records: list[dict]) -> dict:
+    """Instructed task x closest behaviour, in episodes (as instructed first, unrecognised
+    last)."""
+    counts: dict[str, Counter] = defaultdict(Counter)
+    for record in records:
+        counts[record["task"]][_outcome(record)] += 1
+    special = {DID[0]: 0, DID[2]: 1, DID[3]: 3}
+    columns = sorted({c for row in counts.values() for c in row},
+                     key=lambda c: (special.get(c, 2), c))
+    return {"rows": sorted(counts), "columns": columns, "counts": dict(counts)}
 
 
 def report_data(name: str, options: EvalOptions, results: list[dict]) -> dict:
@@ -64,6 +138,12 @@ def report_data(name: str, options: EvalOptions, results: list[dict]) -> dict:
     totals = summary(results, options)
     cells = totals["cells"]
     levels = [level for level in LEVELS if any(level in row for row in cells.values())]
+    # the records hold the instruction given, the task's own in normal mode only
+    instructions = {r["task"]: r["instruction"] for r in results
+                    if options.instruction_mode == "normal" and r.get("instruction")}
+    names = task_names(results, instructions)
+    full = {task: f"{instructions[task]} ({task})" if task in instructions else task
+            for task in names}
     tasks = []
     for task, records in sorted(_group(results, "task").items()):
         done = [r["complete"] for r in records]
@@ -74,17 +154,12 @@ def report_data(name: str, options: EvalOptions, results: list[dict]) -> dict:
     did = {}
     for (scene, level), records in sorted(_group(results, "scene", "level").items()):
         counts = Counter(_did(r) for r in records)
-        did.setdefault(scene, {})[level] = {k: 100 * counts[k] / len(records) for k in DID}
-    confusions = Counter((_short(r["task"]), r["executed_behaviour"]["match"])
-                         for r in results if _did(r) == DID[1])
-    matrices = {}
-    for scene, records in sorted(_group(results, "scene").items()):
-        counts = Counter((_short(r["task"]), (r["executed_behaviour"] or {}).get("match")
-                          or "none") for r in records)
-        rows = sorted({row for row, _ in counts})
-        columns = sorted({column for _, column in counts}, key=lambda c: (c != "instructed", c))
-        matrices[scene] = {"rows": rows, "columns": columns,
-                           "counts": {f"{r}|{c}": n for (r, c), n in counts.items()}}
+        did.setdefault(scene, {})[level] = {
+            "completed": 100 * sum(r["complete"] for r in records) / len(records),
+            **{k: 100 * counts[k] / len(records) for k in DID}}
+    confusions = Counter((r["task"], _outcome(r)) for r in results if _did(r) == DID[1])
+    matrices = {scene: _matrix(records)
+                for scene, records in sorted(_group(results, "scene").items())}
     failures = Counter()
     reasons: dict[str, Counter] = defaultdict(Counter)
     for record in results:
@@ -95,7 +170,8 @@ def report_data(name: str, options: EvalOptions, results: list[dict]) -> dict:
             reasons[failed["stage"]][failed["reason"]] += 1
     return {
         "name": name, "options": options, "summary": totals, "levels": levels,
-        "metrics": METRICS, "cells": cells, "tasks": tasks, "did": did, "did_kinds": DID,
+        "metrics": METRICS, "cells": cells, "tasks": tasks, "names": names, "full": full,
+        "instructions": instructions, "did": did, "did_kinds": DID,
         "confusions": confusions.most_common(TOP), "matrices": matrices,
         "first_failures": [{"stage": stage, "episodes": count,
                             "reasons": reasons[stage].most_common(3)}
