@@ -1,10 +1,12 @@
 """`robofollow dataset check DIR`: validate a dataset against its format's rules.
 
 LeRobot v2.1 / v3.0: info.json fields and feature schema (dtypes, shapes, names), episode and
-task tables (contiguous indices, totals), every episode's frames (columns, dtypes, row count,
-frame/episode/global indices, timestamps = frame_index / fps, finite values), every video (it
-opens, resolution, frame count against the episode length) and the statistics (recomputed from
-the frames and compared). HDF5: info, index and each file's arrays and attributes.
+task tables (contiguous indices, totals; tasks.parquet in each layout LeRobot writes), every
+episode's frames (columns, dtypes, row count, frame/episode/global indices, timestamps =
+frame_index / fps, finite values), every video (it opens, resolution, frame count against the
+episode length) and the statistics (quantiles checked where present; a v3.0 dataset without
+them, as LeRobot's v2.1 converter leaves it, gets a note; state and action recomputed from the
+frames and compared). HDF5: info, index and each file's arrays and attributes.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ import pyarrow.parquet as pq
 
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
 from robofollow.data.lerobot import VIDEO_KEYS
-from robofollow.data.stats import array_stats
+from robofollow.data.stats import BINS, QUANTILE_KEYS, array_stats
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
 from robofollow.sim.video import probe
@@ -40,9 +42,14 @@ class Report:
     episodes: int = 0
     frames: int = 0
     errors: list[str] = field(default_factory=list)
+    notes: list[str] = field(default_factory=list)  # worth knowing, not a problem
 
     def error(self, where: str, message: str) -> None:
         self.errors.append(f"{where}: {message}")
+
+    def note(self, message: str) -> None:
+        if message not in self.notes:
+            self.notes.append(message)
 
     @property
     def ok(self) -> bool:
@@ -50,12 +57,13 @@ class Report:
 
     def to_dict(self) -> dict:
         return {"format": self.format, "episodes": self.episodes, "frames": self.frames,
-                "ok": self.ok, "errors": self.errors}
+                "ok": self.ok, "errors": self.errors, "notes": self.notes}
 
     def render(self, limit: int = 50) -> str:
         head = (f"{self.format} dataset: {self.episodes} episodes, {self.frames} frames: "
                 + ("valid" if self.ok else f"{len(self.errors)} problem(s)"))
-        lines = [head] + [f"  - {e}" for e in self.errors[:limit]]
+        lines = [head] + [f"  - {e}" for e in self.errors[:limit]] + [
+            f"  note: {n}" for n in self.notes]
         if len(self.errors) > limit:
             lines.append(f"  ... and {len(self.errors) - limit} more (--json lists all)")
         return "\n".join(lines)
@@ -173,30 +181,69 @@ def _check_frames(table: pa.Table, where: str, episode: int, length: int, start:
         report.error(where, f"timestamp is not frame_index / fps ({fps})")
 
 
-def _check_stats(stats: dict, table: pa.Table, where: str, report: Report) -> None:
-    """Stored episode statistics against the frames (state, action) and image ranges."""
-    for key in VECTOR_FEATURES:
+QUANTILE_NOTE = ("the statistics have no quantiles (q01 ... q99): LeRobot's policies that "
+                 "normalise by quantiles (pi0.5) need them; LeRobot's "
+                 "augment_dataset_quantile_stats script adds them")
+
+
+def _check_stored(stats: dict, where: str, report: Report,
+                  quantiles_expected: bool) -> list[str]:
+    """Stored statistics of state, action and images: every statistic present, state and
+    action as WIDTH values, images as 3 x 1 x 1 values in [0, 1], min <= q01 <= q10 <= q50 <=
+    q90 <= q99 <= max in every dimension. A feature's quantiles are checked when it has one
+    of them, and then all of them; a feature with none is a note where they are expected
+    (v3.0: LeRobot >= 0.4 writes them, its v2.1 converter and LeRobot 0.3.x did not). Returns
+    the features whose statistics are complete and of the right shape."""
+    usable = []
+    for key in VECTOR_FEATURES + VIDEO_KEYS:
         stored = stats.get(key)
-        if stored is None:
+        if not isinstance(stored, dict):
             report.error(where, f"no statistics for {key}")
+            continue
+        image = key in VIDEO_KEYS
+        has_quantiles = bool(set(QUANTILE_KEYS) & stored.keys())
+        if quantiles_expected and not has_quantiles:
+            report.note(QUANTILE_NOTE)
+        quantiles = QUANTILE_KEYS if has_quantiles else ()
+        names = ("min", *quantiles, "max", "mean", "std")
+        missing = [n for n in names + ("count",) if n not in stored]
+        if missing:
+            report.error(where, f"{key} statistics lack {missing}")
+            continue
+        try:
+            values = np.array([stored[n] for n in names], dtype=np.float64)
+        except (TypeError, ValueError):
+            values = np.empty(0)
+        if image and (values.shape[1:] != (3, 1, 1) or values.min() < -STATS_TOLERANCE
+                      or values.max() > 1 + STATS_TOLERANCE):
+            report.error(where, f"{key} statistics must be 3 x 1 x 1 values in [0, 1]")
+        elif not image and values.shape[1:] != (WIDTH,):
+            report.error(where, f"{key} statistics must be {WIDTH} values each")
+        elif np.any(np.diff(values[:len(quantiles) + 2], axis=0) < -STATS_TOLERANCE):
+            report.error(where, f"{key} statistics are not ordered min <= "
+                         f"{' <= '.join(quantiles)} <= max")
+        else:
+            usable.append(key)
+    return usable
+
+
+def _check_stats(stats: dict, table: pa.Table, where: str, report: Report,
+                 quantiles_expected: bool) -> None:
+    """Stored episode statistics (`_check_stored`), state and action against the frames (a
+    quantile, where stored, within one histogram bin of its recomputed estimate)."""
+    for key in _check_stored(stats, where, report, quantiles_expected):
+        if key not in VECTOR_FEATURES:
             continue
         values = table.column(key).combine_chunks().flatten().to_numpy().reshape(-1, WIDTH)
         expected = array_stats(values)
-        for name in ("min", "max", "mean", "std"):
-            got = np.asarray(stored.get(name, []), dtype=np.float64).reshape(-1)
-            if got.shape != (WIDTH,) or np.abs(got - expected[name]).max() > STATS_TOLERANCE:
+        bin_width = (np.asarray(expected["max"]) - expected["min"]) / BINS
+        quantiles = [q for q in QUANTILE_KEYS if q in stats[key]]  # all or none (checked)
+        for name in ("min", "max", "mean", "std", *quantiles):
+            tolerance = STATS_TOLERANCE + (bin_width if name in QUANTILE_KEYS else 0)
+            if np.any(np.abs(np.asarray(stats[key][name]) - expected[name]) > tolerance):
                 report.error(where, f"{key} {name} does not match the frames")
-        if list(np.ravel(stored.get("count", []))) != expected["count"]:
-            report.error(where, f"{key} count {stored.get('count')} is not {expected['count']}")
-    for key in VIDEO_KEYS:
-        stored = stats.get(key)
-        if stored is None:
-            report.error(where, f"no statistics for {key}")
-            continue
-        for name in ("min", "max", "mean", "std"):
-            values = np.asarray(stored.get(name, []), dtype=np.float64)
-            if values.shape != (3, 1, 1) or values.min() < 0 or values.max() > 1:
-                report.error(where, f"{key} {name} must be 3 x 1 x 1 values in [0, 1]")
+        if list(np.ravel(stats[key]["count"])) != expected["count"]:
+            report.error(where, f"{key} count {stats[key]['count']} is not {expected['count']}")
 
 
 def _check_video(path: Path, feature: dict, fps: float, report: Report,
@@ -273,7 +320,7 @@ def _check_v21(root: Path, info: dict, report: Report) -> None:
         if index not in stats:
             report.error(where, "no entry in episodes_stats.jsonl")
         else:
-            _check_stats(stats[index], table, where, report)
+            _check_stats(stats[index], table, where, report, quantiles_expected=False)
         for key in VIDEO_KEYS:
             video = root / info["video_path"].format(episode_chunk=chunk, video_key=key,
                                                      episode_index=index)
@@ -293,16 +340,44 @@ def _read_parquets(folder: Path, report: Report) -> pa.Table | None:
     return pa.concat_tables([pq.read_table(f) for f in files])
 
 
+def _read_tasks(path: Path, report: Report) -> list[dict] | None:
+    """meta/tasks.parquet as [{"task", "task_index"}], or None (reported). LeRobot writes a
+    pandas frame of task_index indexed by the task strings, the index stored as a column named
+    "task" (LeRobot >= 0.5, and this project) or "__index_level_0__" (unnamed, LeRobot 0.4.x)
+    and listed in the schema's pandas metadata (index_columns); a plain "task" column is read
+    too."""
+    where = "meta/tasks.parquet"
+    try:
+        table = pq.read_table(path)
+        metadata = table.schema.pandas_metadata
+    except (OSError, ValueError, pa.ArrowException) as error:
+        report.error(where, f"unreadable: {error}")
+        return None
+    pandas_index = metadata.get("index_columns") if isinstance(metadata, dict) else None
+    candidates = ["task", *(pandas_index if isinstance(pandas_index, list) else []),
+                  "__index_level_0__"]
+    column = next((c for c in candidates if c in table.column_names), None)
+    if column is None or "task_index" not in table.column_names:
+        report.error(where, "expected a task_index column and the task strings in a 'task' "
+                     "column or as the pandas index (index_columns in the pandas metadata, or "
+                     f"__index_level_0__); found columns {table.column_names}")
+        return None
+    tasks, indices = table.column(column), table.column("task_index")
+    text = pa.types.is_string(tasks.type) or pa.types.is_large_string(tasks.type)
+    if not (text and pa.types.is_integer(indices.type)):
+        report.error(where, f"expected string tasks and integer task_index, got {column} "
+                     f"{tasks.type} and task_index {indices.type}")
+        return None
+    return [{"task": task, "task_index": index}
+            for task, index in zip(tasks.to_pylist(), indices.to_pylist(), strict=True)]
+
+
 def _check_v30(root: Path, info: dict, report: Report) -> None:
     features = _check_info(info, report, ("video_path", "chunks_size"))
     meta = root / "meta"
-    try:
-        tasks = pq.read_table(meta / "tasks.parquet").to_pylist()
-    except (OSError, pa.ArrowException) as error:
-        report.error("meta/tasks.parquet", f"unreadable: {error}")
+    tasks = _read_tasks(meta / "tasks.parquet", report)
+    if tasks is None:
         return
-    if not (meta / "stats.json").is_file():
-        report.error("meta/stats.json", "missing")
     episodes = _read_parquets(meta / "episodes", report)
     if episodes is None:
         return
@@ -341,10 +416,10 @@ def _check_v30(root: Path, info: dict, report: Report) -> None:
                       report)
         stats = {key.split("/")[1]: {} for key in row if key.startswith("stats/")}
         for key, value in row.items():
-            if key.startswith("stats/"):
+            if key.startswith("stats/") and value is not None:  # null: another row has it
                 _, feature, stat = key.split("/")
                 stats[feature][stat] = value
-        _check_stats(stats, frames, where, report)
+        _check_stats(stats, frames, where, report, quantiles_expected=True)
         start += length
         for key in VIDEO_KEYS:
             video = info["video_path"].format(video_key=key,
@@ -362,6 +437,13 @@ def _check_v30(root: Path, info: dict, report: Report) -> None:
             if inside != length or abs(high - low - length / fps) > TIME_TOLERANCE:
                 report.error(f"{where} {key}", f"{inside} video frames in {low:.3f}..{high:.3f}"
                              f" s, the episode has {length}")
+    if not (meta / "stats.json").is_file():
+        report.error("meta/stats.json", "missing")
+    else:
+        stats = _load_json(meta / "stats.json", report)
+        if stats is not None:
+            _check_stored(stats if isinstance(stats, dict) else {}, "meta/stats.json", report,
+                          quantiles_expected=True)
 
 
 # -- HDF5 ------------------------------------------------------------------------------------
