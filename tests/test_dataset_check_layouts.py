@@ -109,3 +109,34 @@ def test_a_malformed_tasks_parquet_is_a_finding_not_a_traceback(v30, tmp_path, c
     assert main(["dataset", "check", str(root)]) == 1
     out = capsys.readouterr()
     assert finding in out.out and "Traceback" not in out.out + out.err
+
+
+def _with_list_vectors(v30: Path, tmp_path: Path, short_row: bool = False) -> Path:
+    """A copy whose state and action are plain list<float> columns, as LeRobot's v2.1 -> v3.0
+    converter writes them (one row cut to 13 values with `short_row`)."""
+    root = tmp_path / "lists"
+    shutil.copytree(v30, root)
+    for path in sorted((root / "data").rglob("*.parquet")):
+        table = pq.read_table(path)
+        for key in ("observation.state", "action"):
+            rows = table.column(key).to_pylist()
+            if short_row:
+                rows[1] = rows[1][:13]
+            table = table.set_column(table.column_names.index(key), key,
+                                     pa.array(rows, pa.list_(pa.float32())))
+        pq.write_table(table, path)
+    return root
+
+
+@pytest.mark.slow
+def test_state_and_action_as_plain_lists_of_14_floats_validate(v30, tmp_path):
+    report = check(_with_list_vectors(v30, tmp_path))
+    assert report.ok, report.errors
+
+
+@pytest.mark.slow
+def test_a_plain_list_row_of_another_width_is_a_finding(v30, tmp_path):
+    errors = check(_with_list_vectors(v30, tmp_path, short_row=True)).errors
+    assert errors and any("observation.state is list<element: float>, expected "
+                          "fixed_size_list<float>[14] (or a list of 14 floats a row)" in e
+                          for e in errors), errors

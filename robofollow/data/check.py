@@ -19,6 +19,7 @@ import av
 import h5py
 import numpy as np
 import pyarrow as pa
+import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
@@ -145,6 +146,20 @@ def _check_info(info: dict, report: Report, required: tuple[str, ...]) -> dict:
     return features
 
 
+def _vector_column(column: pa.ChunkedArray) -> bool:
+    """Whether a column holds WIDTH float32 values a row: a fixed-size list, as this project
+    and LeRobot's writer store it, or a plain list with WIDTH values in every row, as
+    LeRobot's v2.1 -> v3.0 converter does."""
+    kind = column.type
+    if pa.types.is_fixed_size_list(kind):
+        return kind.list_size == WIDTH and kind.value_type == pa.float32()
+    if not (pa.types.is_list(kind) or pa.types.is_large_list(kind)) \
+            or kind.value_type != pa.float32() or column.null_count:
+        return False
+    lengths = pc.list_value_length(column.combine_chunks()).to_numpy()
+    return bool(np.all(lengths == WIDTH))
+
+
 def _check_frames(table: pa.Table, where: str, episode: int, length: int, start: int,
                   task_index: int, fps: float, report: Report) -> None:
     """One episode's frames: columns, dtypes, count, indices, timestamps, finite values."""
@@ -155,10 +170,9 @@ def _check_frames(table: pa.Table, where: str, episode: int, length: int, start:
     if table.num_rows != length:
         report.error(where, f"{table.num_rows} frames, the episode table says {length}")
     for key in VECTOR_FEATURES:
-        kind = table.schema.field(key).type
-        if not (pa.types.is_fixed_size_list(kind) and kind.list_size == WIDTH
-                and kind.value_type == pa.float32()):
-            report.error(where, f"{key} is {kind}, expected fixed_size_list<float>[{WIDTH}]")
+        if not _vector_column(table.column(key)):
+            report.error(where, f"{key} is {table.schema.field(key).type}, expected "
+                         f"fixed_size_list<float>[{WIDTH}] (or a list of {WIDTH} floats a row)")
             continue
         values = table.column(key).combine_chunks().flatten().to_numpy()
         if not np.all(np.isfinite(values)):
@@ -232,7 +246,8 @@ def _check_stats(stats: dict, table: pa.Table, where: str, report: Report,
     """Stored episode statistics (`_check_stored`), state and action against the frames (a
     quantile, where stored, within one histogram bin of its recomputed estimate)."""
     for key in _check_stored(stats, where, report, quantiles_expected):
-        if key not in VECTOR_FEATURES:
+        if key not in VECTOR_FEATURES or key not in table.column_names \
+                or not _vector_column(table.column(key)):  # (reported by _check_frames)
             continue
         values = table.column(key).combine_chunks().flatten().to_numpy().reshape(-1, WIDTH)
         expected = array_stats(values)
