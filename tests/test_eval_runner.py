@@ -62,6 +62,7 @@ def test_the_expert_run_records_every_episode_and_scores_in_full(expert_run):
     record = results[0]
     assert record["steps"] == 500 and record["error"] is None
     assert record["instruction"] == episode(record["episode"])["instruction"]
+    assert "task_instruction" not in record  # only where another instruction was given
     first = record["stages"][0]
     assert first["intent"] == first["execution"] == first["weight"] and set(record["hashes"]) == {
         "episode", "instruction", "initial_state"}
@@ -183,6 +184,19 @@ def test_eval_can_be_limited_to_named_tasks(tmp_path, capsys):
     error = capsys.readouterr().err
     assert "unknown task scene2/L0/pickup_left_cub;" in error
     assert "did you mean scene2/L0/pickup_left_cube" in error
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("mode", ["shuffled", "empty"])
+def test_a_run_given_other_instructions_records_the_tasks_own(tmp_path, mode):
+    out = tmp_path / mode
+    assert main(["eval", "--policy", "noop", "--out", str(out), "--specs", str(builtin_specs()),
+                 "--rounds", "1", "--workers", "1", "--quiet", "--instruction-mode", mode,
+                 "--tasks", "scene2/L0/pickup_left_cube"]) == 0
+    [record] = read_results(out / "episodes.jsonl")
+    own = episode(record["episode"])["instruction"]
+    assert record["task_instruction"] == own and record["instruction"] != own
+    assert "L0 · " + own[:20] in (out / "report.md").read_text()  # the task named by it
 
 
 def test_a_sample_keeps_n_tasks_of_every_scene_and_level_spread_over_its_list():

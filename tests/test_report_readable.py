@@ -83,7 +83,19 @@ def test_the_full_instruction_stays_in_the_task_table_and_the_tooltips(tmp_path)
     assert "referents-1 |" not in text.split("## Tasks")[0]  # ids only in the task table
 
 
-def test_runs_given_other_instructions_name_their_tasks_by_id(tmp_path):
+def test_runs_given_other_instructions_name_tasks_by_their_own_instruction(tmp_path):
+    records = _records(["instructed"])
+    for record in records:  # as the runner writes a shuffled run's records
+        record["task_instruction"] = record["instruction"]
+        record["instruction"] = "Use your right arm to push the red cube."
+    shuffled = replace(OPTIONS, instruction_mode="shuffled")
+    names = report_data("run", shuffled, records)["names"]
+    assert names["scene2/L2/pickup@scene2_1"].startswith("L2 · Use your left arm to pick up")
+    text = _write(tmp_path / "run", records, shuffled)[0].read_text()
+    assert "push the red cube" not in text
+
+
+def test_older_runs_given_other_instructions_name_their_tasks_by_id(tmp_path):
     records = _records(["instructed"])
     shuffled = replace(OPTIONS, instruction_mode="shuffled")
     names = report_data("run", shuffled, records)["names"]

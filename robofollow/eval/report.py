@@ -138,9 +138,11 @@ def report_data(name: str, options: EvalOptions, results: list[dict]) -> dict:
     totals = summary(results, options)
     cells = totals["cells"]
     levels = [level for level in LEVELS if any(level in row for row in cells.values())]
-    # the records hold the instruction given, the task's own in normal mode only
-    instructions = {r["task"]: r["instruction"] for r in results
-                    if options.instruction_mode == "normal" and r.get("instruction")}
+    # the records hold the instruction given and, where it is not the task's own, that one
+    # (runs before task_instruction was recorded: their tasks are named by id)
+    instructions = {r["task"]: text for r in results
+                    if (text := r.get("task_instruction") or (
+                        r.get("instruction") if options.instruction_mode == "normal" else None))}
     names = task_names(results, instructions)
     full = {task: f"{instructions[task]} ({task})" if task in instructions else task
             for task in names}

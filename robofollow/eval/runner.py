@@ -112,12 +112,16 @@ def _digest(data: bytes) -> str:
 
 
 def result_record(episode: dict, instruction: str, run: EpisodeRun) -> dict:
+    """An episode's line in RUN/episodes.jsonl. `instruction` is the one given; where it is
+    not the task's own (the empty and shuffled controls), `task_instruction` holds that."""
     score, trajectory = run.score, run.trajectory
     start = trajectory.positions[0].tobytes() + trajectory.quaternions[0].tobytes()
+    own = {} if instruction == episode["instruction"] else {
+        "task_instruction": episode["instruction"]}
     return {
         "episode": episode["episode"], "scene": episode["scene"], "level": episode["level"],
         "task": episode["task"], "layout": episode["layout"], "round": episode["round"],
-        "seed": episode["seed"], "instruction": instruction,
+        "seed": episode["seed"], "instruction": instruction, **own,
         "intent_score": score.intent_score, "execution_score": score.execution_score,
         "complete": score.complete, "other_branch": score.other_branch,
         "stages": [s.model_dump(mode="json") for s in score.stages],
