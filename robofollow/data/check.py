@@ -161,21 +161,24 @@ def _vector_column(column: pa.ChunkedArray) -> bool:
 
 
 def _check_frames(table: pa.Table, where: str, episode: int, length: int, start: int,
-                  task_index: int, fps: float, report: Report) -> None:
-    """One episode's frames: columns, dtypes, count, indices, timestamps, finite values."""
+                  task_index: int, fps: float, report: Report) -> dict[str, np.ndarray]:
+    """One episode's frames: columns, dtypes, count, indices, timestamps, finite values.
+    Returns its state and action as [N, WIDTH] arrays, where their columns are of a valid
+    type."""
     missing = [c for c in VECTOR_FEATURES + tuple(SCALAR_FEATURES) if c not in table.column_names]
     if missing:
         report.error(where, f"missing columns {missing}")
-        return
+        return {}
     if table.num_rows != length:
         report.error(where, f"{table.num_rows} frames, the episode table says {length}")
+    arrays = {}
     for key in VECTOR_FEATURES:
         if not _vector_column(table.column(key)):
             report.error(where, f"{key} is {table.schema.field(key).type}, expected "
                          f"fixed_size_list<float>[{WIDTH}] (or a list of {WIDTH} floats a row)")
             continue
-        values = table.column(key).combine_chunks().flatten().to_numpy()
-        if not np.all(np.isfinite(values)):
+        arrays[key] = table.column(key).combine_chunks().flatten().to_numpy().reshape(-1, WIDTH)
+        if not np.all(np.isfinite(arrays[key])):
             report.error(where, f"{key} has non-finite values")
     for key, dtype in SCALAR_FEATURES.items():
         if table.schema.field(key).type != pa.from_numpy_dtype(np.dtype(dtype)):
@@ -193,6 +196,7 @@ def _check_frames(table: pa.Table, where: str, episode: int, length: int, start:
     times = table.column("timestamp").to_numpy().astype(np.float64)
     if np.abs(times - np.arange(n) / fps).max(initial=0.0) > TIME_TOLERANCE:
         report.error(where, f"timestamp is not frame_index / fps ({fps})")
+    return arrays
 
 
 QUANTILE_NOTE = ("the statistics have no quantiles (q01 ... q99): LeRobot's policies that "
@@ -241,16 +245,15 @@ def _check_stored(stats: dict, where: str, report: Report,
     return usable
 
 
-def _check_stats(stats: dict, table: pa.Table, where: str, report: Report,
+def _check_stats(stats: dict, arrays: dict[str, np.ndarray], where: str, report: Report,
                  quantiles_expected: bool) -> None:
-    """Stored episode statistics (`_check_stored`), state and action against the frames (a
-    quantile, where stored, within one histogram bin of its recomputed estimate)."""
+    """Stored episode statistics (`_check_stored`), state and action against the frames'
+    (`arrays`, from `_check_frames`; a quantile, where stored, within one histogram bin of its
+    recomputed estimate)."""
     for key in _check_stored(stats, where, report, quantiles_expected):
-        if key not in VECTOR_FEATURES or key not in table.column_names \
-                or not _vector_column(table.column(key)):  # (reported by _check_frames)
+        if key not in arrays:  # an image, or a column _check_frames reported
             continue
-        values = table.column(key).combine_chunks().flatten().to_numpy().reshape(-1, WIDTH)
-        expected = array_stats(values)
+        expected = array_stats(arrays[key])
         bin_width = (np.asarray(expected["max"]) - expected["min"]) / BINS
         quantiles = [q for q in QUANTILE_KEYS if q in stats[key]]  # all or none (checked)
         for name in ("min", "max", "mean", "std", *quantiles):
@@ -329,13 +332,13 @@ def _check_v21(root: Path, info: dict, report: Report) -> None:
             report.error(where, f"cannot read {path.relative_to(root)}: {error}")
             start += length
             continue
-        _check_frames(table, where, index, length, start, task_index[record["tasks"][0]], fps,
-                      report)
+        arrays = _check_frames(table, where, index, length, start,
+                               task_index[record["tasks"][0]], fps, report)
         start += length
         if index not in stats:
             report.error(where, "no entry in episodes_stats.jsonl")
         else:
-            _check_stats(stats[index], table, where, report, quantiles_expected=False)
+            _check_stats(stats[index], arrays, where, report, quantiles_expected=False)
         for key in VIDEO_KEYS:
             video = root / info["video_path"].format(episode_chunk=chunk, video_key=key,
                                                      episode_index=index)
@@ -427,14 +430,14 @@ def _check_v30(root: Path, info: dict, report: Report) -> None:
         offset = row["dataset_from_index"] - (table.column("index")[0].as_py()
                                               if table.num_rows else 0)
         frames = table.slice(max(offset, 0), length)
-        _check_frames(frames, where, index, length, start, task_index[row["tasks"][0]], fps,
-                      report)
+        arrays = _check_frames(frames, where, index, length, start,
+                               task_index[row["tasks"][0]], fps, report)
         stats = {key.split("/")[1]: {} for key in row if key.startswith("stats/")}
         for key, value in row.items():
             if key.startswith("stats/") and value is not None:  # null: another row has it
                 _, feature, stat = key.split("/")
                 stats[feature][stat] = value
-        _check_stats(stats, frames, where, report, quantiles_expected=True)
+        _check_stats(stats, arrays, where, report, quantiles_expected=True)
         start += length
         for key in VIDEO_KEYS:
             video = info["video_path"].format(video_key=key,
