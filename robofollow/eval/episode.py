@@ -38,13 +38,14 @@ class EpisodeRun:
     seconds: float
 
 
-def observation(policy: Policy, stage: Stage, instruction: str, steps: int,
+def observation(uses: frozenset[str], stage: Stage, instruction: str, steps: int,
                 privileged: Privileged | None) -> dict:
-    """What the policy sees now: only the parts it uses are computed (images are rendered)."""
+    """What a policy that reads `uses` sees now: only those parts are computed (images are
+    rendered)."""
     sim = stage.sim
     obs = {"state": robot.observed_state(sim.state()), "instruction": instruction,
            "step": steps}
-    if "images" in policy.uses:
+    if "images" in uses:
         obs["images"] = stage.cameras.images()
     if privileged is not None:
         obs["privileged"] = privileged
@@ -131,7 +132,7 @@ def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy 
     text = episode["instruction"] if instruction is None else instruction
     while error is None and not rollout.done:
         rollout.queries += 1
-        seen = observation(policy, stage, text, rollout.steps, privileged)
+        seen = observation(uses, stage, text, rollout.steps, privileged)
         try:
             with deadline(timeout):
                 answer = policy.act(seen)

@@ -133,6 +133,12 @@ def result_record(episode: dict, instruction: str, run: EpisodeRun) -> dict:
                    "initial_state": _digest(start)}}
 
 
+def episode_record(compiled: Compiled, episode: dict, instruction: str, run: EpisodeRun) -> dict:
+    """The episode's full record: `result_record` with its chance and followed references."""
+    return dict(result_record(episode, instruction, run),
+                **references(compiled, episode, instruction))
+
+
 class Evaluator:
     """Evaluates episodes one after another (one per worker process)."""
 
@@ -148,8 +154,7 @@ class Evaluator:
                     if self.options.video != "none" else None)
         run = run_episode(self.compiled, self.stage, episode, self.policy, instruction,
                           on_frame=on_frame, timeout=self.options.policy_timeout)
-        record = dict(result_record(episode, instruction, run),
-                      **references(self.compiled, episode, instruction))
+        record = episode_record(self.compiled, episode, instruction, run)
         if frames and (self.options.video == "all" or not run.score.complete):
             name = episode["episode"].replace("/", "__").replace("#", "_") + ".mp4"
             path = self.out / "videos" / name
@@ -200,8 +205,7 @@ class _LostEpisodes:
         instruction = given_instruction(self.compiled, episode, self.options.instruction_mode)
         run = run_episode(self.compiled, self.stage, episode, None, instruction,
                           failed=f"the policy process {what} during the episode")
-        return dict(result_record(episode, instruction, run),
-                    **references(self.compiled, episode, instruction))
+        return episode_record(self.compiled, episode, instruction, run)
 
     def close(self) -> None:
         if self.stage is not None:

@@ -25,7 +25,6 @@ from __future__ import annotations
 import time
 from collections.abc import Iterable, Mapping
 from pathlib import Path
-from types import SimpleNamespace
 from typing import Any
 
 from vla_eval.benchmarks.base import StepBenchmark, StepResult
@@ -34,7 +33,7 @@ from vla_eval.render import configure_mujoco_render
 from vla_eval.specs import IMAGE_RGB, LANGUAGE, STATE_JOINT, DimSpec
 
 _ALL_ROUNDS = 10 ** 9
-_IMAGE_POLICY = SimpleNamespace(uses=frozenset({"state", "instruction", "images"}))
+IMAGE_POLICY_USES = frozenset({"state", "instruction", "images"})  # what a model server reads
 
 
 def _names(value: str | Iterable[str] | None) -> list[str] | None:
@@ -141,20 +140,18 @@ class RoboFollowBenchmark(StepBenchmark):
         """What `robofollow eval` shows an image policy, rendered once per query."""
         from robofollow.eval.episode import observation
 
-        obs = observation(_IMAGE_POLICY, self.stage, self._instruction, self._rollout.steps,
-                          None)
+        obs = observation(IMAGE_POLICY_USES, self.stage, self._instruction,
+                          self._rollout.steps, None)
         self._recorder.record_video(obs["images"]["cam_high"])
         return {"images": obs["images"], "state": obs["state"],
                 "task_description": obs["instruction"]}
 
     def get_step_result(self, step_result: StepResult) -> dict[str, Any]:
         """The `robofollow eval` episode record, scored by the oracle, with success."""
-        from robofollow.eval.chance import references
-        from robofollow.eval.runner import result_record
+        from robofollow.eval.runner import episode_record
 
         run = self._rollout.finish(self._error, self._began)
-        record = {**result_record(self._rollout.episode, self._instruction, run),
-                  **references(self.compiled, self._rollout.episode, self._instruction)}
+        record = episode_record(self.compiled, self._rollout.episode, self._instruction, run)
         return {"success": bool(record["complete"]), **record}
 
     # -- declarations --------------------------------------------------------------------------
