@@ -20,7 +20,7 @@ from robofollow.compiler import parser
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.splits import generate
 from robofollow.compiler.training import check_training
-from robofollow.oracle.audit import audit
+from robofollow.audit.splits import audit
 
 ROOT = Path(__file__).resolve().parent.parent
 

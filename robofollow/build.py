@@ -34,10 +34,10 @@ from robofollow.compiler.spec_loader import load_partial, spec_files
 from robofollow.compiler.splits import Splits, TestTask, episode_seed, generate
 from robofollow.compiler.training import training_behaviours
 from robofollow.compiler.world import World
-from robofollow.data.files import json_line
+from robofollow.files import json_line
 from robofollow.errors import RoboFollowError, SpecErrors
-from robofollow.oracle.audit import FINDING_KEYS, audit, findings
-from robofollow.oracle.task_audit import listed_tests
+from robofollow.audit.splits import FINDING_KEYS, audit, findings
+from robofollow.audit.task_list import listed_tests
 
 
 @dataclass

@@ -16,7 +16,7 @@ from robofollow.compiler.notation import notation
 from robofollow.compiler.parser import parse
 from robofollow.compiler.realize import STYLES, realize
 from robofollow.compiler.spec import LEVELS
-from robofollow.data.files import json_line
+from robofollow.files import json_line
 from robofollow.data.jobs import FORMATS, INSTRUCTION_MODES
 from robofollow.errors import InstructionError, RoboFollowError
 from robofollow.resources import builtin_specs
@@ -126,8 +126,8 @@ def _verify(compiled, specs: Path, rounds: int, workers: int | None) -> bool:
 
 def cmd_audit(args) -> int:
     from robofollow.build import clean, compile_specs, summary
-    from robofollow.data.files import write_jsonl
-    from robofollow.oracle.task_audit import audit_task_list, read_task_list, task_list
+    from robofollow.files import write_jsonl
+    from robofollow.audit.task_list import audit_task_list, read_task_list, task_list
 
     compiled = compile_specs(specs_of(args))
     if args.export_tasks:
@@ -154,7 +154,7 @@ def cmd_audit(args) -> int:
 
 def _task_list_text(path: str, listed: dict) -> str:
     """Findings grouped by kind, with counts."""
-    from robofollow.oracle.task_audit import FINDING_KINDS
+    from robofollow.audit.task_list import FINDING_KINDS
 
     findings = listed["findings"]
     lines = ["", f"task list {path}: {listed['checked']} tasks checked, "

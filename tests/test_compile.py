@@ -8,8 +8,8 @@ import pytest
 
 from robofollow import cli
 from robofollow.build import compile_specs
-from robofollow.oracle.audit import findings
-from robofollow.oracle.task_audit import ListedTask, audit_task_list, task_list
+from robofollow.audit.splits import findings
+from robofollow.audit.task_list import ListedTask, audit_task_list, task_list
 from robofollow.resources import builtin_specs
 from tests.test_spec_loader import edit
 
@@ -83,7 +83,7 @@ def test_bad_specs_are_reported_with_positions_and_exit_1(tmp_path, capsys):
 
 def test_injected_leaks_are_caught():
     from robofollow.build import compile_specs
-    from robofollow.oracle.audit import leakage
+    from robofollow.audit.splits import leakage
 
     compiled = compile_specs(SPECS)
     spec, splits = compiled.spec, compiled.splits

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 from robofollow.compiler.spec_loader import load_spec
-from robofollow.oracle.entropy import entropy_bits, scene_entropy, scene_groups
+from robofollow.audit.entropy import entropy_bits, scene_entropy, scene_groups
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
 

@@ -17,7 +17,7 @@ from robofollow.compiler.routes import ROUTE_BAND, degenerate_routes
 from robofollow.compiler.spec import Body, Layout, Placed, Scene
 from robofollow.compiler.world import World
 from robofollow.errors import SpecErrors
-from robofollow.oracle.audit import FINDING_KEYS, findings, leakage
+from robofollow.audit.splits import FINDING_KEYS, findings, leakage
 from tests.strategies import rich_specs, route_geometry, small_specs
 
 HEAVY = settings(max_examples=25, deadline=None,

@@ -11,7 +11,7 @@ import pytest
 from robofollow.build import compile_specs
 from robofollow.cli import main
 from robofollow.errors import RoboFollowError
-from robofollow.oracle.task_audit import (
+from robofollow.audit.task_list import (
     FINDING_KINDS,
     ListedTask,
     audit_task_list,

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from robofollow.build import all_episodes, compile_specs, summary
 from robofollow.eval.verify import run_expert_episodes
-from robofollow.oracle.audit import findings
+from robofollow.audit.splits import findings
 from robofollow.resources import builtin_specs
 
 README = Path(__file__).resolve().parent.parent / "README.md"

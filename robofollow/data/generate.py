@@ -21,7 +21,7 @@ from tqdm import tqdm
 
 from robofollow.build import Compiled
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
-from robofollow.data.files import changed_options, write_json_atomic
+from robofollow.files import changed_options, write_json_atomic
 from robofollow.data.jobs import DemoJob, demo_jobs
 from robofollow.data.units import Options, UnitRecorder, unit_path
 from robofollow.errors import RoboFollowError

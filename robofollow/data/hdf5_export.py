@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from robofollow.data.files import link_or_copy, write_json, write_jsonl
+from robofollow.files import link_or_copy, write_json, write_jsonl
 from robofollow.data.units import ROBOT_TYPE
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES

@@ -8,7 +8,7 @@ from pathlib import Path
 import pyarrow.parquet as pq
 
 from robofollow.data import lerobot
-from robofollow.data.files import link_or_copy, write_json, write_jsonl
+from robofollow.files import link_or_copy, write_json, write_jsonl
 from robofollow.data.lerobot import CHUNKS_SIZE, VIDEO_KEYS
 
 VERSION = "v2.1"

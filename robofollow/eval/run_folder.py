@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-from robofollow.data.files import changed_options, json_line, write_json_atomic
+from robofollow.files import changed_options, json_line, write_json_atomic
 from robofollow.errors import RoboFollowError
 
 RUN_FILE, RESULTS, SUMMARY, LOCK = "run.json", "episodes.jsonl", "summary.json", ".lock"

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from robofollow.data.files import write_json_atomic
+from robofollow.files import write_json_atomic
 from robofollow.errors import RoboFollowError
 from robofollow.learn.model import Architecture
 

@@ -22,7 +22,7 @@ from PIL import Image
 from tqdm import tqdm
 
 from robofollow.build import Compiled
-from robofollow.data.files import write_json, write_jsonl
+from robofollow.files import write_json, write_jsonl
 from robofollow.errors import RoboFollowError
 from robofollow.sim.stage import Stage
 from robofollow.vqa import paper

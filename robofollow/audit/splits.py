@@ -32,7 +32,7 @@ from robofollow.compiler.spec import Spec
 from robofollow.compiler.split_report import rule_report
 from robofollow.compiler.splits import Splits
 from robofollow.compiler.world import World, jitter_worlds
-from robofollow.oracle.entropy import (behaviour_entropy_bits, entropy_bits, same_behaviours,
+from robofollow.audit.entropy import (behaviour_entropy_bits, entropy_bits, same_behaviours,
                                        scene_groups)
 
 

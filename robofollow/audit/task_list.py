@@ -41,7 +41,7 @@ from robofollow.compiler.spec_loader import not_utf8, spec_error
 from robofollow.compiler.splits import TestTask
 from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
 from robofollow.errors import InstructionError, RoboFollowError, SpecError
-from robofollow.oracle.audit import SeenTasks, TrainingFacts
+from robofollow.audit.splits import SeenTasks, TrainingFacts
 
 FINDING_KINDS = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "route",
                  "infeasible", "repertoire", "duplicate", "leakage", "level")
