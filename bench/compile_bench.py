@@ -15,7 +15,8 @@ import tempfile
 import time
 from pathlib import Path
 
-from robofollow.build import Compiled, write
+from robofollow.build.output import write
+from robofollow.build.pipeline import Compiled
 from robofollow.compiler import parser
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.splits import generate

@@ -31,7 +31,8 @@ from pathlib import Path
 import numpy as np
 
 import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
-from robofollow.build import all_episodes, compile_specs
+from robofollow.build.pipeline import compile_specs
+from robofollow.build.rounds import all_episodes
 from robofollow.eval.reference import ExpertPolicy
 from robofollow.eval.runner import EvalOptions, evaluate, read_results
 from robofollow.resources import builtin_specs
@@ -52,8 +53,8 @@ def seeing() -> SeeingExpert:
 
 def _sample(count: int) -> list[str]:
     episodes = [e for e in all_episodes(compile_specs(builtin_specs()))
-                if e["level"] == "L0" and e["round"] == 1]
-    return [e["episode"] for e in episodes[::max(1, len(episodes) // count)][:count]]
+                if e.level == "L0" and e.round == 1]
+    return [e.id for e in episodes[::max(1, len(episodes) // count)][:count]]
 
 
 def _child(policy: str, episode_ids: list[str], workers: int, queue) -> None:

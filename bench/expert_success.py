@@ -17,7 +17,8 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-from robofollow.build import all_episodes, compile_specs
+from robofollow.build.pipeline import compile_specs
+from robofollow.build.rounds import all_episodes
 from robofollow.compiler.spec import LEVELS
 from robofollow.eval.verify import run_expert_episodes
 
@@ -35,9 +36,9 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     compiled = compile_specs(Path(args.specs))
     levels, scenes = args.levels.split(","), [s for s in args.scenes.split(",") if s]
-    todo = [e for e in all_episodes(compiled) if e["level"] in levels
-            and (not scenes or e["scene"] in scenes)
-            and (args.rounds is None or e["round"] <= args.rounds)]
+    todo = [e for e in all_episodes(compiled) if e.level in levels
+            and (not scenes or e.scene in scenes)
+            and (args.rounds is None or e.round <= args.rounds)]
     began = time.perf_counter()
     results = run_expert_episodes(Path(args.specs), todo, args.workers)
     wall = time.perf_counter() - began

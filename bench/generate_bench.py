@@ -31,7 +31,7 @@ import mujoco
 import numpy as np
 import pyarrow.parquet as pq
 
-from robofollow.build import compile_specs
+from robofollow.build.pipeline import compile_specs
 from robofollow.data.generate import generate
 from robofollow.data.jobs import demo_jobs
 from robofollow.data.units import Options
@@ -108,7 +108,7 @@ def mean_length() -> float:
     lengths = []
     with ExpertRunner() as runner:
         for job in demo_jobs(compiled, 1, labels):
-            run = runner.run(compiled.spec.scenes[job.scene], job.episode(0))
+            run = runner.run(compiled, job.episode(0))
             lengths.append(run.steps)
     return float(np.mean(lengths))
 

@@ -18,8 +18,8 @@ from functools import partial
 from pathlib import Path
 
 import robofollow  # noqa: F401  (before MuJoCo: headless GL default)
-from robofollow.build import compile_specs, find_episode
-from robofollow.compiler.behaviour import Behaviour
+from robofollow.build.pipeline import compile_specs
+from robofollow.build.rounds import find_episode
 from robofollow.oracle.score import score
 from robofollow.sim.rollout import run_expert
 
@@ -61,10 +61,10 @@ def main() -> None:
     alone_all, full_all = [], []
     for episode_id in KINDS:
         record = find_episode(compiled, episode_id)
-        scene = compiled.spec.scenes[record["scene"]]
-        trajectory = padded(run_expert(scene, record).trajectory, args.frames)
-        behaviour = Behaviour.model_validate(record["behaviour"])
-        candidates = compiled.candidates(record["scene"])
+        scene = compiled.spec.scenes[record.scene]
+        trajectory = padded(run_expert(compiled, record).trajectory, args.frames)
+        behaviour = record.behaviour
+        candidates = compiled.candidates(record.scene)
         result = score(behaviour, trajectory, scene, candidates=candidates)
         assert result.complete and result.intent_score == 1.0, (episode_id, result.failures)
         alone = median_ms(partial(score, behaviour, trajectory, scene), args.repeats)

@@ -22,7 +22,8 @@ import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
 import mujoco
 import numpy as np
 
-from robofollow.build import compile_specs
+from robofollow.build.episode import Episode
+from robofollow.build.pipeline import compile_specs
 from robofollow.resources import builtin_specs
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
@@ -30,11 +31,11 @@ from robofollow.sim.env import RoboFollowEnv
 from robofollow.sim.simulation import SUBSTEPS, Simulation
 
 
-def _episode_of(scene: str, layout: str) -> dict:
-    from robofollow.build import all_episodes
+def _episode_of(scene: str, layout: str) -> Episode:
+    from robofollow.build.rounds import all_episodes
 
     return next(e for e in all_episodes(compile_specs(builtin_specs()))
-                if e["scene"] == scene and e["layout"] == layout)
+                if e.scene == scene and e.layout == layout)
 
 
 def raw_physics(scene: str, layout: str, steps: int) -> float:
@@ -55,7 +56,7 @@ def _actions(steps: int) -> np.ndarray:
     return home + phase * sweep
 
 
-def env_loop(episode: dict, steps: int) -> tuple[float, float]:
+def env_loop(episode: Episode, steps: int) -> tuple[float, float]:
     """Wall-clock start and end of `steps` env steps (set-up excluded)."""
     env = RoboFollowEnv(episode=episode)
     env.reset()
@@ -68,16 +69,16 @@ def env_loop(episode: dict, steps: int) -> tuple[float, float]:
     return began, ended
 
 
-def env_rate(episode: dict, steps: int) -> float:
+def env_rate(episode: Episode, steps: int) -> float:
     began, ended = env_loop(episode, steps)
     return steps / (ended - began)
 
 
-def bare_rate(episode: dict, steps: int) -> float:
+def bare_rate(episode: Episode, steps: int) -> float:
     """The same physics and frames with nothing of RoboFollow in the loop."""
-    scene = compile_specs(builtin_specs()).spec.scenes[episode["scene"]]
-    sim = Simulation(scene, episode["layout"])
-    sim.reset(episode["seed"])
+    scene = compile_specs(builtin_specs()).spec.scenes[episode.scene]
+    sim = Simulation(scene, episode.layout)
+    sim.reset(episode.seed)
     model, data = sim.model, sim.data
     renderer = mujoco.Renderer(model, 240, 320)
     ctrl = [np.r_[a[:6], [a[6] * robot.FINGER_TRAVEL] * 2, a[7:13], [a[13] * robot.FINGER_TRAVEL] * 2]

@@ -95,7 +95,9 @@ def cmd_parse(args) -> int:
 
 
 def cmd_compile(args) -> int:
-    from robofollow.build import check_out, clean, compile_specs, summary, write
+    from robofollow.build.output import check_out, write
+    from robofollow.build.pipeline import clean, compile_specs
+    from robofollow.build.summary import summary
 
     check_out(Path(args.out))  # before the work: an --out that cannot take the build is refused
     specs = specs_of(args)
@@ -109,10 +111,10 @@ def cmd_compile(args) -> int:
 
 def _verify(compiled, specs: Path, rounds: int, workers: int | None) -> bool:
     """The expert on the first `rounds` rounds of every test task; failures listed."""
-    from robofollow.build import all_episodes
+    from robofollow.build.rounds import all_episodes
     from robofollow.eval.verify import run_expert_episodes
 
-    episodes = [e for e in all_episodes(compiled) if e["round"] <= rounds]
+    episodes = [e for e in all_episodes(compiled) if e.round <= rounds]
     print(f"\nverifying: the expert on {len(episodes)} episodes ({rounds} round"
           f"{'s' if rounds > 1 else ''} of every test task) in simulation")
     results = run_expert_episodes(specs, episodes, workers or os.cpu_count() or 1)
@@ -125,7 +127,8 @@ def _verify(compiled, specs: Path, rounds: int, workers: int | None) -> bool:
 
 
 def cmd_audit(args) -> int:
-    from robofollow.build import clean, compile_specs, summary
+    from robofollow.build.pipeline import clean, compile_specs
+    from robofollow.build.summary import summary
     from robofollow.files import write_jsonl
     from robofollow.audit.task_list import audit_task_list, read_task_list, task_list
 
@@ -208,7 +211,8 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def cmd_expert(args) -> int:
-    from robofollow.build import compile_specs, find_episode
+    from robofollow.build.pipeline import compile_specs
+    from robofollow.build.rounds import find_episode
     from robofollow.sim.cameras import side_by_side
     from robofollow.sim.rollout import run_expert
     from robofollow.sim.simulation import CONTROL_HZ
@@ -218,7 +222,7 @@ def cmd_expert(args) -> int:
     episode = find_episode(compiled, args.episode)
     width, height = args.image_size
     frames: list = []
-    result = run_expert(compiled.spec.scenes[episode["scene"]], episode,
+    result = run_expert(compiled, episode,
                         (lambda images: frames.append(side_by_side(images))) if args.video
                         else None, width, height)
     if args.video:
@@ -226,14 +230,14 @@ def cmd_expert(args) -> int:
     if args.trajectory:
         result.trajectory.save(args.trajectory)
     if args.json:
-        print(json.dumps(dict(result.summary(), instruction=episode["instruction"])))
+        print(json.dumps(dict(result.summary(), instruction=episode.instruction)))
     else:
         verdict = "achieved" if result.achieved else "NOT achieved"
-        print(f"{episode['episode']}: {verdict} in {result.steps} control steps "
+        print(f"{episode.id}: {verdict} in {result.steps} control steps "
               f"({result.steps / CONTROL_HZ:.1f} s simulated, {result.seconds:.2f} s wall), "
               f"Intent {result.score.intent_score:.2f}, Execution "
               f"{result.score.execution_score:.2f}")
-        print(f"  instruction: {episode['instruction']}")
+        print(f"  instruction: {episode.instruction}")
         for reason in result.score.failures:
             print(f"  - {reason}")
         for label, path in (("video", args.video), ("trajectory", args.trajectory)):
@@ -243,7 +247,8 @@ def cmd_expert(args) -> int:
 
 
 def cmd_score(args) -> int:
-    from robofollow.build import compile_specs, find_episode
+    from robofollow.build.pipeline import compile_specs
+    from robofollow.build.rounds import find_episode
     from robofollow.scoring import score_recording
     from robofollow.trajectory import Trajectory
 
@@ -258,14 +263,14 @@ def cmd_score(args) -> int:
     if args.json:
         print(result.model_dump_json(indent=1))
     else:
-        print(f"{record['episode']}  ({len(trajectory)} frames)")
-        print(f"instruction: {record['instruction']}\n")
+        print(f"{record.id}  ({len(trajectory)} frames)")
+        print(f"instruction: {record.instruction}\n")
         print(result.table())
     return 0
 
 
 def cmd_render(args) -> int:
-    from robofollow.build import compile_specs
+    from robofollow.build.pipeline import compile_specs
     from robofollow.sim.picture import layout_picture
 
     compiled = compile_specs(specs_of(args))
@@ -291,7 +296,7 @@ def _layout(compiled, scene: str, layout: str | None) -> str:
 
 
 def cmd_vqa(args) -> int:
-    from robofollow.build import compile_specs
+    from robofollow.build.pipeline import compile_specs
     from robofollow.vqa.paper import LAYOUT, SCENE
     from robofollow.vqa.probe import write_probe
 
@@ -321,7 +326,7 @@ def cmd_vqa_score(args) -> int:
 
 
 def cmd_generate(args) -> int:
-    from robofollow.build import compile_specs
+    from robofollow.build.pipeline import compile_specs
     from robofollow.data.generate import generate
     from robofollow.data.jobs import select_tasks
     from robofollow.data.units import Options
@@ -397,7 +402,7 @@ def cmd_dataset_check(args) -> int:
 
 
 def cmd_eval(args) -> int:
-    from robofollow.build import compile_specs
+    from robofollow.build.pipeline import compile_specs
     from robofollow.eval.deadline import DEFAULT_POLICY_TIMEOUT
     from robofollow.eval.loading import is_server, with_privileged
     from robofollow.eval.report import write_report
@@ -478,7 +483,7 @@ def _names(text: str | None, known: list[str], what: str) -> list[str]:
 def cmd_serve(args) -> int:
     import logging
 
-    from robofollow.build import compile_specs
+    from robofollow.build.pipeline import compile_specs
     from robofollow.eval.serving import ServerLimits
     from robofollow.eval.tcp import TcpPolicyServer
     from robofollow.eval.websocket import PolicyServer

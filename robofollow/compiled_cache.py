@@ -25,15 +25,17 @@ from functools import cache, cached_property, lru_cache
 from importlib import metadata
 from pathlib import Path
 
+from robofollow.build.episode import Episode
 from robofollow.compiler.spec import LEVELS, Spec
 from robofollow.compiler.spec_loader import spec_files
 
 FORMAT = 1  # bump when the file layout or the records' meaning changes
 KEEP = 8  # cache files kept (the newest); older ones are removed when one is written
-# the code the compile runs, under robofollow/ (a test checks that these are exactly the modules
-# that robofollow.build and this module import): a change to it, and only to it, compiles again
-SOURCES = ("build.py", "compiled_cache.py", "errors.py", "resources.py", "files.py", "compiler",
-           "audit")
+# the code the compile runs, under robofollow/ (a test checks that these are the modules the
+# cached compile imports, and beside them only the rest of the compiler): a change to it, and
+# only to it, compiles again
+SOURCES = ("build/__init__.py", "build/episode.py", "build/pipeline.py", "build/rounds.py",
+           "compiled_cache.py", "errors.py", "resources.py", "files.py", "compiler", "audit")
 
 
 @dataclass
@@ -48,11 +50,11 @@ class Episodes:
     def index(self) -> dict[str, int]:
         return {episode: i for i, episode in enumerate(self.ids)}
 
-    def record(self, episode_id: str) -> dict:
-        """The episode with this id (`<scene>/<level>/<task>#r<round>`), as the build writes it."""
+    def record(self, episode_id: str) -> Episode:
+        """The episode with this id (`<scene>/<level>/<task>#r<round>`)."""
         if episode_id not in self.index:
             raise _unknown(episode_id, self.ids)
-        return json.loads(self.lines[self.index[episode_id]])
+        return Episode.model_validate_json(self.lines[self.index[episode_id]])
 
     def select(self, scene: str | None = None, level: str | None = None) -> tuple[str, ...]:
         """The ids of the episodes of a scene and a level (None: any)."""
@@ -66,7 +68,7 @@ class Episodes:
 
 
 def _unknown(episode_id: str, ids: tuple[str, ...]) -> Exception:
-    from robofollow.build import unknown_episode  # (imports the compiler: only on error)
+    from robofollow.build.rounds import unknown_episode  # (imports the compiler: only on error)
 
     return unknown_episode(episode_id, list(dict.fromkeys(e.partition("#")[0] for e in ids)))
 
@@ -146,15 +148,15 @@ def _load(specs: Path, digest: str, folder: Path | None) -> Episodes:
 
 def _compile(specs: Path, digest: str) -> bytes:
     """The cache file's bytes for `specs`, compiled."""
-    from robofollow.build import all_episodes, compile_specs  # (seconds: only on a miss)
-    from robofollow.files import json_line
+    from robofollow.build.pipeline import compile_specs  # (seconds: only on a miss)
+    from robofollow.build.rounds import all_episodes
 
     compiled = compile_specs(specs)
     records = all_episodes(compiled)
     body = (compiled.spec.model_dump_json() + "\n"
-            + "".join(json_line(record, sort_keys=True) for record in records)).encode()
+            + "".join(episode.line() for episode in records)).encode()
     header = {"format": FORMAT, "key": digest, "sha256": hashlib.sha256(body).hexdigest(),
-              "ids": [record["episode"] for record in records]}
+              "ids": [episode.id for episode in records]}
     return json.dumps(header).encode() + b"\n" + body
 
 

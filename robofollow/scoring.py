@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import dataclasses
 
-from robofollow.build import Compiled
-from robofollow.compiler.behaviour import Behaviour
+from robofollow.build.episode import EpisodeSetup
+from robofollow.build.pipeline import Compiled
 from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
 from robofollow.errors import RoboFollowError
 from robofollow.oracle.results import EpisodeScore
@@ -19,20 +19,20 @@ class RecordingMismatchError(RoboFollowError):
     """A trajectory that was not recorded in the episode's scene layout."""
 
 
-def score_recording(compiled: Compiled, record: dict, trajectory: Trajectory,
+def score_recording(compiled: Compiled, episode: EpisodeSetup, trajectory: Trajectory,
                     profile: ScoringProfile = DEFAULT_PROFILE) -> EpisodeScore:
-    scene = compiled.spec.scenes[record["scene"]]
+    scene = compiled.spec.scenes[episode.scene]
     layout = trajectory.meta.get("layout")
-    if layout is not None and layout != record["layout"]:
+    if layout is not None and layout != episode.layout:
         raise RecordingMismatchError(f"the trajectory was recorded in layout {layout!r}, but "
-                                     f"{record['episode']} uses layout {record['layout']!r}")
-    expected = set(scene.layouts[record["layout"]].placed)
+                                     f"{episode.id} uses layout {episode.layout!r}")
+    expected = set(scene.layouts[episode.layout].placed)
     if set(trajectory.bodies) != expected:
         raise RecordingMismatchError(
             f"the trajectory's bodies ({', '.join(sorted(trajectory.bodies))}) are not those "
-            f"of {record['scene']} layout {record['layout']} ({', '.join(sorted(expected))})")
+            f"of {episode.scene} layout {episode.layout} ({', '.join(sorted(expected))})")
     if layout is None:  # recorded elsewhere without a layout name: the episode's, checked above
         trajectory = dataclasses.replace(trajectory, meta={**trajectory.meta,
-                                                           "layout": record["layout"]})
-    return score(Behaviour.model_validate(record["behaviour"]), trajectory, scene, profile,
-                 episode=record["episode"], candidates=compiled.candidates(record["scene"]))
+                                                           "layout": episode.layout})
+    return score(episode.behaviour, trajectory, scene, profile,
+                 episode=episode.id, candidates=compiled.candidates(episode.scene))

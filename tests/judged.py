@@ -22,8 +22,8 @@ from robofollow.oracle.results import EpisodeScore
 from robofollow.scoring import score_recording
 from robofollow.sim import robot
 from robofollow.sim.expert import Expert
-from robofollow.sim.rollout import META_KEYS, execute
-from robofollow.sim.simulation import Simulation
+from robofollow.sim.rollout import Rollout
+from robofollow.sim.stage import Stage
 from robofollow.trajectory import Trajectory
 from tests.sim_helpers import benchmark, episode
 
@@ -35,10 +35,10 @@ class Script:
 
     def __init__(self, episode_id: str):
         self.record = episode(episode_id)
-        self.scene = benchmark().spec.scenes[self.record["scene"]]
-        self.sim = Simulation(self.scene, self.record["layout"], 64, 48)
-        self.world = self.sim.reset(self.record["seed"])
-        self.asked = Behaviour.model_validate(self.record["behaviour"])
+        self.scene = benchmark().spec.scenes[self.record.scene]
+        self.rollout = Rollout(benchmark(), Stage(64, 48), self.record, render=False)
+        self.sim, self.world = self.rollout.sim, self.rollout.world
+        self.asked = self.record.behaviour
         self.expert = Expert(self.sim)
         self.actions: list[np.ndarray] = []
         self.command = robot.home_state()
@@ -161,8 +161,8 @@ class Script:
     # -- results ------------------------------------------------------------------------------
 
     def trajectory(self) -> Trajectory:
-        actions = self.actions + [self.command.copy()] * SETTLE
-        return execute(self.sim, actions, {k: self.record[k] for k in META_KEYS})
+        self.rollout.execute(self.actions + [self.command.copy()] * SETTLE)
+        return self.rollout.recorder.trajectory()
 
     def score(self) -> EpisodeScore:
         return score_recording(benchmark(), self.record, self.trajectory())

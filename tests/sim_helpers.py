@@ -8,7 +8,9 @@ import sys
 from contextlib import contextmanager
 from functools import lru_cache
 
-from robofollow.build import Compiled, all_episodes, compile_specs
+from robofollow.build.episode import Episode
+from robofollow.build.pipeline import Compiled, compile_specs
+from robofollow.build.rounds import all_episodes
 from robofollow.resources import builtin_specs
 
 
@@ -18,11 +20,11 @@ def benchmark() -> Compiled:
 
 
 @lru_cache(maxsize=1)
-def _episodes() -> dict[str, dict]:
-    return {e["episode"]: e for e in all_episodes(benchmark())}
+def _episodes() -> dict[str, Episode]:
+    return {e.id: e for e in all_episodes(benchmark())}
 
 
-def episode(episode_id: str) -> dict:
+def episode(episode_id: str) -> Episode:
     return _episodes()[episode_id]
 
 

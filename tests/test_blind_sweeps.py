@@ -12,7 +12,7 @@ from functools import cache
 import numpy as np
 import pytest
 
-from robofollow.build import all_episodes
+from robofollow.build.rounds import all_episodes
 from robofollow.eval.chance import references
 from robofollow.scoring import score_recording
 from tests.judged import Script
@@ -40,8 +40,8 @@ def cells() -> dict[tuple[str, str], dict[str, list[dict]]]:
     """Round-1 test episodes by scene x level, then by layout."""
     grouped: dict = defaultdict(lambda: defaultdict(list))
     for episode in all_episodes(benchmark()):
-        if episode["round"] == 1:
-            grouped[episode["scene"], episode["level"]][episode["layout"]].append(episode)
+        if episode.round == 1:
+            grouped[episode.scene, episode.level][episode.layout].append(episode)
     return grouped
 
 
@@ -65,11 +65,11 @@ def test_sweeping_blindly_scores_at_or_below_chance_in_every_level(scene):
     for level in ("L0", "L1", "L2", "L3"):
         layouts = cells()[scene, level]
         episodes = [e for group in layouts.values() for e in group]
-        chance = np.mean([references(compiled, e, e["instruction"])["chance"]["IS"]
+        chance = np.mean([references(compiled, e, e.instruction)["chance"]["IS"]
                           for e in episodes])
         earned: dict[str, list[float]] = defaultdict(list)
         for group in layouts.values():
-            for name, trajectory in sweeps(group[0]["episode"]):
+            for name, trajectory in sweeps(group[0].id):
                 for episode in group:
                     result = score_recording(compiled, episode, trajectory)
                     earned[name].append(result.intent_score)

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from robofollow import cli
-from robofollow.build import compile_specs
+from robofollow.build.pipeline import compile_specs
 from robofollow.audit.splits import findings
 from robofollow.audit.task_list import ListedTask, audit_task_list, task_list
 from robofollow.resources import builtin_specs
@@ -82,7 +82,7 @@ def test_bad_specs_are_reported_with_positions_and_exit_1(tmp_path, capsys):
 
 
 def test_injected_leaks_are_caught():
-    from robofollow.build import compile_specs
+    from robofollow.build.pipeline import compile_specs
     from robofollow.audit.splits import leakage
 
     compiled = compile_specs(SPECS)

@@ -183,10 +183,10 @@ def test_rejected_attempts_are_discarded_recorded_and_the_next_seed_tried(tmp_pa
     real = ExpertRunner.run
     calls = []
 
-    def first_attempt_fails(self, scene, episode, on_images=None):
-        run = real(self, scene, episode, on_images)
-        calls.append(episode["seed"])
-        if episode["seed"] == demo_seed(0, 0):
+    def first_attempt_fails(self, compiled, episode, on_images=None):
+        run = real(self, compiled, episode, on_images)
+        calls.append(episode.seed)
+        if episode.seed == demo_seed(0, 0):
             run.score = run.score.model_copy(update={"complete": False})
         return run
 
@@ -205,8 +205,8 @@ def test_rejected_attempts_are_discarded_recorded_and_the_next_seed_tried(tmp_pa
 def test_a_task_without_any_complete_attempt_is_reported_not_hidden(tmp_path, monkeypatch):
     real = ExpertRunner.run
 
-    def never(self, scene, episode, on_images=None):
-        run = real(self, scene, episode, on_images)
+    def never(self, compiled, episode, on_images=None):
+        run = real(self, compiled, episode, on_images)
         run.score = run.score.model_copy(update={"complete": False})
         return run
 

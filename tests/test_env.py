@@ -8,11 +8,10 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from robofollow.build import UnknownEpisodeError
+from robofollow.build.rounds import UnknownEpisodeError
 from robofollow.sim import robot
 from robofollow.sim.env import RoboFollowEnv
 from robofollow.sim.expert import Expert
-from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.plans import plan
 from robofollow.oracle.score import score
 from tests.sim_helpers import benchmark
@@ -56,18 +55,18 @@ def test_same_seed_same_state_and_images(env):
 def test_the_episode_sets_instruction_and_seed(env):
     obs, info = env.reset(options={"episode": "scene2/L0/pickup_left_cube#r3"})
     assert obs["instruction"] == "Use your left arm to pick up the leftmost cube."
-    assert info["seed"] == next(e for e in _episodes() if e["episode"] == info["episode"])["seed"]
+    assert info["seed"] == next(e for e in _episodes() if e.id == info["episode"]).seed
 
 
 def _episodes():
-    from robofollow.build import all_episodes
+    from robofollow.build.rounds import all_episodes
 
     return all_episodes(benchmark())
 
 
 def test_expert_actions_through_the_env_achieve_the_behaviour(env):
     obs, info = env.reset(options={"episode": "scene2/L0/stack_left_cube_on_blue_cylinder#r1"})
-    behaviour = Behaviour.model_validate(env.episode["behaviour"])
+    behaviour = env.episode.behaviour
     actions = Expert(env.sim).actions(plan(behaviour, env.sim.start_world))
     for action in actions:
         obs, reward, terminated, truncated, info = env.step(action.astype(np.float32))

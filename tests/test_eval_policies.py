@@ -12,7 +12,8 @@ from robofollow.compiler import workspace
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
 from robofollow.eval.chance import references
-from robofollow.eval.episode import ACTION_BUDGET, CHUNK_LIMIT, run_episode
+from robofollow.eval.episode import run_episode
+from robofollow.sim import CHUNK, MAX_STEPS
 from robofollow.eval.policy import BadActionError, validate_actions
 from robofollow.eval.reference import (
     REFERENCE_POLICIES,
@@ -61,7 +62,7 @@ def test_a_joint_far_past_its_limit_is_clipped_to_it():
 ])
 def test_the_expert_policy_reads_the_instruction_and_scores_in_full(stage, episode_id):
     run = run_episode(benchmark(), stage, episode(episode_id), REFERENCE_POLICIES["expert"]())
-    assert run.error is None and run.steps == ACTION_BUDGET
+    assert run.error is None and run.steps == MAX_STEPS
     assert run.score.complete and run.score.intent_score == run.score.execution_score == 1.0
 
 
@@ -70,7 +71,7 @@ def test_given_another_tasks_instruction_the_expert_performs_that_task(stage):
     record = episode("scene2/L0/pickup_left_cube#r1")
     other = episode("scene2/L0/pickup_right_cube#r1")
     run = run_episode(benchmark(), stage, record, REFERENCE_POLICIES["expert"](),
-                      instruction=other["instruction"])
+                      instruction=other.instruction)
     assert run.score.intent_score == 0.0 and not run.score.complete
     assert run.score.executed_behaviour.match == "pickup_right_cube"
 
@@ -123,7 +124,7 @@ def test_the_expert_follows_an_instruction_that_names_no_arm(stage):
 def test_noop_spends_the_budget_in_chunks_and_scores_nothing(stage):
     run = run_episode(benchmark(), stage, episode("scene1/L0/pickup_yellow_block_2#r1"),
                       REFERENCE_POLICIES["noop"]())
-    assert (run.steps, run.queries) == (ACTION_BUDGET, ACTION_BUDGET // CHUNK_LIMIT)
+    assert (run.steps, run.queries) == (MAX_STEPS, MAX_STEPS // CHUNK)
     assert run.score.intent_score == run.score.execution_score == 0.0
 
 
@@ -214,7 +215,7 @@ def test_a_policy_that_hangs_past_its_time_limit_ends_its_episode(stage, hang_at
 def test_a_time_limit_leaves_a_policy_within_it_alone(stage):
     run = run_episode(benchmark(), stage, episode("scene1/L0/pickup_yellow_block_2#r1"),
                       _Hangs(hang_at=-1), timeout=30)
-    assert (run.steps, run.error) == (ACTION_BUDGET, None)
+    assert (run.steps, run.error) == (MAX_STEPS, None)
 
 
 @pytest.mark.slow
@@ -222,4 +223,4 @@ def test_the_expert_holds_in_full_chunks_once_its_plan_is_done(stage):
     run = run_episode(benchmark(), stage, episode("scene2/L0/pickup_left_cube#r1"),
                       REFERENCE_POLICIES["expert"]())
     # full chunks, and one short chunk where the plan ends (not one query per held step)
-    assert run.queries <= ACTION_BUDGET // CHUNK_LIMIT + 1
+    assert run.queries <= MAX_STEPS // CHUNK + 1

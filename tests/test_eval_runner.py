@@ -61,7 +61,7 @@ def test_the_expert_run_records_every_episode_and_scores_in_full(expert_run):
     assert "Followed" not in printed  # shown only when it is below 100
     record = results[0]
     assert record["steps"] == 500 and record["error"] is None
-    assert record["instruction"] == episode(record["episode"])["instruction"]
+    assert record["instruction"] == episode(record["episode"]).instruction
     assert "task_instruction" not in record  # only where another instruction was given
     first = record["stages"][0]
     assert first["intent"] == first["execution"] == first["weight"] and set(record["hashes"]) == {
@@ -155,7 +155,7 @@ def test_policies_load_by_name_or_module_factory_with_clear_errors():
 def test_the_instruction_controls():
     record = episode("scene2/L0/pickup_left_cube#r1")
     compiled = benchmark()
-    assert given_instruction(compiled, record, "normal") == record["instruction"]
+    assert given_instruction(compiled, record, "normal") == record.instruction
     assert given_instruction(compiled, record, "empty") == ""
     shuffled = given_instruction(compiled, record, "shuffled")
     assert shuffled == given_instruction(compiled, record, "shuffled")  # seeded
@@ -194,7 +194,7 @@ def test_a_run_given_other_instructions_records_the_tasks_own(tmp_path, mode):
                  "--rounds", "1", "--workers", "1", "--quiet", "--instruction-mode", mode,
                  "--tasks", "scene2/L0/pickup_left_cube"]) == 0
     [record] = read_results(out / "episodes.jsonl")
-    own = episode(record["episode"])["instruction"]
+    own = episode(record["episode"]).instruction
     assert record["task_instruction"] == own and record["instruction"] != own
     assert "L0 · " + own[:20] in (out / "report.md").read_text()  # the task named by it
 
@@ -206,9 +206,9 @@ def test_a_sample_keeps_n_tasks_of_every_scene_and_level_spread_over_its_list():
                                                     levels=("L0", "L1"), sample=3))
     for scene in ("scene1", "scene4"):
         for level in ("L0", "L1"):
-            tasks = list(dict.fromkeys(e["task"] for e in every
-                                       if (e["scene"], e["level"]) == (scene, level)))
-            kept = [e["task"] for e in sampled if (e["scene"], e["level"]) == (scene, level)]
+            tasks = list(dict.fromkeys(e.task for e in every
+                                       if (e.scene, e.level) == (scene, level)))
+            kept = [e.task for e in sampled if (e.scene, e.level) == (scene, level)]
             assert kept == [tasks[0], tasks[len(tasks) // 3], tasks[2 * len(tasks) // 3]]
     assert len(select_episodes(benchmark(), _options(sample=100))) == 16  # fewer tasks: all
 

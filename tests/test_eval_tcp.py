@@ -96,12 +96,12 @@ def test_an_upstream_style_server_is_driven_through_an_episode(stage):
     assert run.error is None and (run.steps, run.queries) == (20, 4)
     commands = [r["cmd"] for r in server.log]
     assert commands == ["reset", "set_instruction"] + ["predict"] * 4
-    assert server.log[1]["obs"] == episode(EPISODE)["instruction"]
+    assert server.log[1]["obs"] == episode(EPISODE).instruction
     obs = server.log[2]["obs"]
     assert set(obs["observation"]) == {"head_camera", "left_camera", "right_camera"}
     rgb = _unarray(obs["observation"]["head_camera"]["rgb"])
     assert rgb.shape == (240, 320, 3) and rgb.dtype == np.uint8
-    assert obs["instruction"] == episode(EPISODE)["instruction"]
+    assert obs["instruction"] == episode(EPISODE).instruction
 
 
 def test_a_server_error_is_reported_with_its_message():

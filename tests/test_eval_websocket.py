@@ -99,7 +99,7 @@ def test_an_openpi_style_server_gets_aloha_observations(stage):
     assert run.error is None and (run.steps, run.queries) == (30, 3)
     first = seen[0]
     assert set(first) == {"state", "images", "prompt"}
-    assert first["prompt"] == episode(EPISODE)["instruction"]
+    assert first["prompt"] == episode(EPISODE).instruction
     assert first["state"].dtype == np.float32 and first["state"].shape == (14,)
     assert {k: v.shape for k, v in first["images"].items()} == {
         name: (3, 240, 320) for name in ("cam_high", "cam_left_wrist", "cam_right_wrist")}

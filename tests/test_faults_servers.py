@@ -700,8 +700,8 @@ def test_eval_sends_privileged_observations_only_with_the_flag_and_records_it(tm
     assert run["policy"] == uri + "?privileged=1"
     observations = [m for m in seen if "state" in m]
     assert len(observations) == 10 and all(
-        m["privileged"] == {"scene": "scene2", "layout": episode(EPISODE)["layout"],
-                            "seed": episode(EPISODE)["seed"]} for m in observations)
+        m["privileged"] == {"scene": "scene2", "layout": episode(EPISODE).layout,
+                            "seed": episode(EPISODE).seed} for m in observations)
     assert main(["eval", "--policy", "noop", "--allow-privileged", "--out",
                  str(tmp_path / "local"), *common]) == 1
     assert "for policy servers" in capsys.readouterr().err

@@ -19,7 +19,8 @@ from pathlib import Path
 
 import pytest
 
-from robofollow import build, cli
+from robofollow import cli
+from robofollow.build import output
 from robofollow.compiler.spec import MAX_BODIES, MAX_LAYOUTS, MAX_SPEC_BYTES, MAX_STACK
 from tests.test_spec_loader import VALID
 
@@ -422,7 +423,7 @@ def test_out_in_a_read_only_folder(tmp_path, specs, capsys):
 
 def test_out_read_only_as_the_check_sees_it(tmp_path, specs, capsys, monkeypatch):
     """The same refusal where permissions are not enforced (root): os.access says no."""
-    monkeypatch.setattr(build.os, "access", lambda path, mode: False)
+    monkeypatch.setattr(output.os, "access", lambda path, mode: False)
     status, _, err = compile_to(tmp_path / "build", specs, capsys)
     assert status == 1 and f"--out {tmp_path / 'build'} cannot be made: {tmp_path} is " \
                            "read-only" in err
@@ -442,7 +443,7 @@ def test_a_full_disk_leaves_the_previous_build_and_nothing_half_written(tmp_path
             raise OSError(errno.ENOSPC, "No space left on device")
         return json.dumps(record) + "\n"
 
-    monkeypatch.setattr(build, "_line", full)
+    monkeypatch.setattr(output, "_line", full)
     status, _, err = compile_to(out, specs, capsys)
     assert status == 1
     assert f"cannot write the build to {out}: no space left on the device" in err
@@ -454,7 +455,7 @@ def test_a_full_disk_on_a_new_folder_leaves_nothing(tmp_path, specs, capsys, mon
     def full(record):
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(build, "_line", full)
+    monkeypatch.setattr(output, "_line", full)
     status, _, err = compile_to(tmp_path / "new" / "build", specs, capsys)
     assert status == 1 and "no space left on the device" in err
     assert not (tmp_path / "new").exists()

@@ -461,7 +461,7 @@ def test_the_catalogue_spreads_over_scenes_levels_and_actions():
                                                                                 "L3"}
     kinds = set()
     for case in CASES:
-        for step in Behaviour.model_validate(episode(case.episode)["behaviour"]).steps:
+        for step in episode(case.episode).behaviour.steps:
             kinds.add((step.action, "transfer" if step.waypoints else
                        step.relation if step.relation in ("on", "in") else None))
     assert {("pick", None), ("place", None), ("place", "on"), ("place", "in"), ("push", None),

@@ -6,7 +6,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from robofollow.build import all_episodes, compile_specs
+from robofollow.build.pipeline import compile_specs
+from robofollow.build.rounds import all_episodes
 from robofollow.cli import main
 from robofollow.resources import builtin_specs
 
@@ -37,8 +38,8 @@ def test_listed_tests_compile_into_their_levels_with_episodes(tmp_path):
     listed = {t.id: t for t in compiled.splits.tasks if t.wording == "listed"}
     assert set(listed) == {"scene2/L3/left_bowl_swapped", "scene2/L1/blue_cylinder_swapped"}
     assert listed["scene2/L3/left_bowl_swapped"].behaviour.steps[0].target == "yellow_bowl"
-    episodes = [e for e in all_episodes(compiled) if e["task"] == "scene2/L3/left_bowl_swapped"]
-    assert len(episodes) == 10 and episodes[0]["behaviour"]["steps"][0]["arm"] == "right"
+    episodes = [e for e in all_episodes(compiled) if e.task == "scene2/L3/left_bowl_swapped"]
+    assert len(episodes) == 10 and episodes[0].behaviour.steps[0].arm == "right"
     report = compiled.report
     assert all(not report[k] for k in ("leakage", "level_inconsistencies",
                                         "repertoire_violations", "ambiguities"))

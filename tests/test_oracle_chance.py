@@ -62,13 +62,13 @@ def test_guessing_is_bounded_and_only_guesses_with_intent_complete(asked, perfor
 
 def test_episode_references_name_the_chance_and_the_followed_instruction():
     record = episode("scene2/L0/pickup_left_cube#r1")
-    own = references(benchmark(), record, record["instruction"])
+    own = references(benchmark(), record, record.instruction)
     assert own["followed_intent"] == 1.0
     # 16 guesses: the pickup itself (1.0) and two stacks of the same cube (0.8 each: picked
     # up, then set down) complete it under the paper's rule for pickups; the rest earn nothing
     assert own["chance"] == {"IS": pytest.approx(2.6 / 16), "CR": pytest.approx(3 / 16)}
     assert references(benchmark(), record, "")["followed_intent"] is None
-    other = episode("scene2/L0/pickup_right_cube#r1")["instruction"]
+    other = episode("scene2/L0/pickup_right_cube#r1").instruction
     assert references(benchmark(), record, other)["followed_intent"] == 0.0
 
 

@@ -11,28 +11,24 @@ from robofollow.compiler.plans import Plan, plan
 from robofollow.oracle.score import score
 from robofollow.sim import robot
 from robofollow.sim.expert import Expert
-from robofollow.sim.rollout import META_KEYS, execute
-from robofollow.sim.simulation import Simulation
+from robofollow.sim.rollout import Rollout
+from robofollow.sim.stage import Stage
 from tests.judged import Script
 from tests.sim_helpers import benchmark, episode
 
 
 def behaviour_of(record: dict) -> Behaviour:
-    return Behaviour.model_validate(record["behaviour"])
+    return record.behaviour
 
 
 def perform(record: dict, behaviour: Behaviour | None = None, edit=None, extra: int = 0):
     """Record the expert of `behaviour` (default: the episode's) in the episode's layout and
     seed, its plan changed by `edit`; then score the recording against the episode."""
-    scene = benchmark().spec.scenes[record["scene"]]
-    sim = Simulation(scene, record["layout"], 64, 48)
-    world = sim.reset(record["seed"])
-    points = plan(behaviour or behaviour_of(record), world)
-    actions = Expert(sim).actions(edit(points) if edit else points)
-    actions = list(actions) + [actions[-1]] * extra
-    trajectory = execute(sim, actions, {k: record[k] for k in META_KEYS})
-    return score(behaviour_of(record), trajectory, scene, episode=record["episode"],
-                 candidates=benchmark().candidates(record["scene"]))
+    rollout = Rollout(benchmark(), Stage(64, 48), record, render=False)
+    points = plan(behaviour or behaviour_of(record), rollout.world)
+    actions = Expert(rollout.sim).actions(edit(points) if edit else points)
+    rollout.execute(list(actions) + [actions[-1]] * extra)
+    return rollout.finish()[0]
 
 
 def credits(result) -> list[tuple[float, float]]:
@@ -138,12 +134,9 @@ def test_the_other_arm_grasping_as_well_loses_the_finish():
     "scene4/L0/s41_if_bowl_nonempty_then_l_pick_blue_else_r_stack#r1"])
 def test_a_no_op_scores_zero_everywhere(asked):
     record = episode(asked)
-    scene = benchmark().spec.scenes[record["scene"]]
-    sim = Simulation(scene, record["layout"], 64, 48)
-    sim.reset(record["seed"])
-    trajectory = execute(sim, [robot.home_state()] * 150, {k: record[k] for k in META_KEYS})
-    result = score(behaviour_of(record), trajectory, scene, candidates=benchmark().candidates(
-        record["scene"]))
+    rollout = Rollout(benchmark(), Stage(64, 48), record, render=False)
+    rollout.execute([robot.home_state()] * 150)
+    result = rollout.finish()[0]
     assert all(c == (0.0, 0.0) for c in credits(result)) and not result.complete
     assert result.executed_behaviour.description == "nothing moved"
     assert result.executed_behaviour.match is None
@@ -208,9 +201,9 @@ def test_a_mixed_sequence_completes_on_every_steps_end_state():
     both = Behaviour(steps=(Step(action="pick", arm="left", source="yellow_block_2"),
                             behaviour_of(record).steps[0]))
     scene = benchmark().spec.scenes["scene1"]
-    done = Script(record["episode"]).perform(both)
+    done = Script(record.id).perform(both)
     result = score(both, done.trajectory(), scene)
     assert result.intent_score == result.execution_score == 1.0 and result.complete
-    dropped = Script(record["episode"]).perform(both).grip("left", 1.0)  # lets the pickup go
+    dropped = Script(record.id).perform(both).grip("left", 1.0)  # lets the pickup go
     result = score(both, dropped.trajectory(), scene)
     assert result.stages[-1].intent == 0.0 and not result.complete

@@ -33,12 +33,12 @@ FRAME_ARRAYS = ("time", "state", "action", "positions", "quaternions", "ee_posit
 @pytest.fixture(scope="module")
 def expert() -> Trajectory:
     record = episode(PLACE)
-    return run_expert(benchmark().spec.scenes["scene1"], record).trajectory
+    return run_expert(benchmark(), record).trajectory
 
 
 @functools.cache
 def asked() -> Behaviour:
-    return Behaviour.model_validate(episode(PLACE)["behaviour"])
+    return episode(PLACE).behaviour
 
 
 def scored(trajectory: Trajectory, profile: ScoringProfile = DEFAULT_PROFILE):

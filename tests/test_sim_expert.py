@@ -37,7 +37,7 @@ KINDS = [
 @pytest.mark.parametrize("episode_id", KINDS)
 def test_the_expert_scores_in_full_on_every_kind_of_behaviour(episode_id):
     record = episode(episode_id)
-    result = run_expert(benchmark().spec.scenes[record["scene"]], record)
+    result = run_expert(benchmark(), record)
     assert result.achieved, result.score.failures
     assert result.score.intent_score == result.score.execution_score == 1.0
     trajectory = result.trajectory
@@ -53,8 +53,7 @@ def test_the_expert_scores_in_full_on_every_kind_of_behaviour(episode_id):
     "scene2/L0/push_red_cylinder_to_left_cube#r2"])
 def test_the_expert_is_deterministic(episode_id):
     record = episode(episode_id)
-    scene = benchmark().spec.scenes[record["scene"]]
-    a, b = run_expert(scene, record).trajectory, run_expert(scene, record).trajectory
+    a, b = run_expert(benchmark(), record).trajectory, run_expert(benchmark(), record).trajectory
     assert np.array_equal(a.positions, b.positions) and np.array_equal(a.action, b.action)
 
 
@@ -63,13 +62,13 @@ def test_other_levels_and_layouts():
     for level in ("L1", "L2", "L3"):
         task = next(t for t in compiled.splits.tasks if t.level == level and t.scene == "scene2")
         record = episode(f"{task.id}#r1")
-        result = run_expert(compiled.spec.scenes["scene2"], record)
+        result = run_expert(compiled, record)
         assert result.achieved, (task.id, result.score.failures)
 
 
 def test_a_pick_is_held_and_recorded_as_grasped():
     record = episode("scene2/L0/pickup_left_cube#r1")
-    trajectory = run_expert(benchmark().spec.scenes["scene2"], record).trajectory
+    trajectory = run_expert(benchmark(), record).trajectory
     cube = trajectory.index("large_blue_cube")
     assert trajectory.grasped[0, 0] == -1 and trajectory.grasped[-1, 0] == cube
     assert trajectory.grasped[-1, 1] == -1
@@ -82,13 +81,13 @@ def test_a_pick_is_held_and_recorded_as_grasped():
 
 def test_trajectory_save_and_load(tmp_path):
     record = episode("scene3/L0/r_pick2_via4_to6_short_front#r1")
-    trajectory = run_expert(benchmark().spec.scenes["scene3"], record).trajectory
+    trajectory = run_expert(benchmark(), record).trajectory
     trajectory.save(tmp_path / "t.npz")
     loaded = Trajectory.load(tmp_path / "t.npz")
     assert loaded.bodies == trajectory.bodies and loaded.meta == trajectory.meta
     for name in ("positions", "quaternions", "state", "action", "grasped", "contacts"):
         assert np.array_equal(getattr(loaded, name), getattr(trajectory, name))
-    assert isinstance(loaded.positions, np.ndarray) and loaded.meta["seed"] == record["seed"]
+    assert isinstance(loaded.positions, np.ndarray) and loaded.meta["seed"] == record.seed
 
 
 @pytest.mark.parametrize("arm", [0, 1])

@@ -9,7 +9,7 @@ from pathlib import Path
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from robofollow.build import compile_specs
+from robofollow.build.pipeline import compile_specs
 from robofollow.compiler.behaviour import Step
 from robofollow.compiler.motions import Repertoire
 from robofollow.compiler.observation import same_observation

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.build import compile_specs
+from robofollow.build.pipeline import compile_specs
 from robofollow.cli import main
 from robofollow.errors import RoboFollowError
 from robofollow.audit.task_list import (

@@ -17,7 +17,8 @@ try:
 except ImportError as missing:  # a failure, not a skip: the adapter is tested in CI
     raise ImportError("these tests need vla-eval: pip install 'robofollow[vla-eval]'") from missing
 
-from robofollow.build import compile_specs, find_episode
+from robofollow.build.pipeline import compile_specs
+from robofollow.build.rounds import find_episode
 from robofollow.eval.chance import references
 from robofollow.eval.episode import run_episode
 from robofollow.eval.reference import ExpertPolicy
@@ -66,8 +67,8 @@ def robofollow_record(compiled, episode, policy) -> tuple[dict, object]:
     """The episode's record as `robofollow eval` writes it (its own loop, as JSON)."""
     with Stage(64, 48) as stage:
         run = run_episode(compiled, stage, episode, policy, budget=BUDGET)
-    record = {**result_record(episode, episode["instruction"], run),
-              **references(compiled, episode, episode["instruction"])}
+    record = {**result_record(episode, episode.instruction, run),
+              **references(compiled, episode, episode.instruction)}
     return json.loads(json.dumps(record)), run
 
 

@@ -7,7 +7,9 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
-from robofollow.build import all_episodes, compile_specs, summary
+from robofollow.build.pipeline import compile_specs
+from robofollow.build.rounds import all_episodes
+from robofollow.build.summary import summary
 from robofollow.eval.verify import run_expert_episodes
 from robofollow.audit.splits import findings
 from robofollow.resources import builtin_specs
@@ -56,6 +58,6 @@ def test_the_readme_walkthrough_compiles_as_described(tmp_path):
            "from the table at (-3.0, -22.0, 76.0) cm" in moved["pickup_right_cube"]
 
     ids = {t.id for t in new}
-    episodes = [e for e in all_episodes(compiled) if e["task"] in ids and e["round"] == 1]
+    episodes = [e for e in all_episodes(compiled) if e.task in ids and e.round == 1]
     results = run_expert_episodes(specs, episodes, workers=2, quiet=True)
     assert [r["episode"] for r in results if not r["full"]] == []

@@ -11,8 +11,10 @@ a -> b means b is scored only when a is fully achieved. A sequence chains its st
 from __future__ import annotations
 
 import json
+from collections.abc import Mapping
 from functools import lru_cache
 from itertools import pairwise
+from types import MappingProxyType
 
 import networkx as nx
 
@@ -176,11 +178,21 @@ def graph_to_dict(graph: nx.DiGraph) -> dict:
             "edges": [[a, b] for a, b in graph.edges]}
 
 
+def _read_only(value):
+    """A node's attributes as read-only views (mappings) and tuples (lists), all through."""
+    if isinstance(value, dict):
+        return MappingProxyType({key: _read_only(item) for key, item in value.items()})
+    if isinstance(value, list | tuple):
+        return tuple(_read_only(item) for item in value)
+    return value
+
+
 @lru_cache(maxsize=4096)
 def scoring_nodes(behaviour: Behaviour,
-                  profile: ScoringProfile) -> tuple[tuple[str, dict, str], ...]:
+                  profile: ScoringProfile) -> tuple[tuple[str, Mapping, str], ...]:
     """The goal DAG's nodes in scoring order, each with a key naming what it checks (equal
-    keys in different behaviours evaluate alike, so a recording evaluates them once)."""
+    keys in different behaviours evaluate alike, so a recording evaluates them once). Cached
+    and shared by every caller, so read-only all through."""
     graph = goal_graph(behaviour, profile)
-    return tuple((n, graph.nodes[n], json.dumps([graph.nodes[n][k] for k in (
+    return tuple((n, _read_only(graph.nodes[n]), json.dumps([graph.nodes[n][k] for k in (
         "name", "arm", "intent", "execution")], sort_keys=True)) for n in stage_order(graph))

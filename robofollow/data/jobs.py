@@ -13,7 +13,9 @@ import numpy as np
 from robofollow.errors import RoboFollowError
 
 if TYPE_CHECKING:  # the CLI reads this module's constants without loading the compiler
-    from robofollow.build import Compiled
+    from robofollow.build.episode import EpisodeSetup
+    from robofollow.build.pipeline import Compiled
+    from robofollow.compiler.behaviour import Behaviour
 
 # Demonstration seeds live far above the test episodes' seeds (split seed bases are small and
 # rounds few), so no training demonstration shares a jittered start with a test episode.
@@ -33,7 +35,7 @@ class DemoJob:
     scene: str
     layout: str
     index: int  # episode index within the task, 0-based
-    behaviour: dict  # the task's behaviour, as JSON
+    behaviour: Behaviour  # the task's behaviour
     instructions: tuple[str, ...]  # one dataset episode per instruction, in this order
 
     @property
@@ -44,10 +46,12 @@ class DemoJob:
     def seed(self, attempt: int) -> int:
         return demo_seed(self.index, attempt)
 
-    def episode(self, attempt: int) -> dict:
-        """The record the expert runner takes for one attempt."""
-        return {"episode": f"{self.label}#demo{self.index}", "scene": self.scene,
-                "layout": self.layout, "seed": self.seed(attempt), "behaviour": self.behaviour}
+    def episode(self, attempt: int) -> EpisodeSetup:
+        """What the expert runner takes for one attempt."""
+        from robofollow.build.episode import EpisodeSetup
+
+        return EpisodeSetup(id=f"{self.label}#demo{self.index}", scene=self.scene,
+                            layout=self.layout, seed=self.seed(attempt), behaviour=self.behaviour)
 
 
 def demo_seed(index: int, attempt: int) -> int:
@@ -89,7 +93,7 @@ def demo_jobs(compiled: Compiled, per_task: int, labels: list[str],
     jobs = []
     for label in labels:
         task = tasks[label]
-        behaviour = compiled.training[label].model_dump(mode="json")
+        behaviour = compiled.training[label]
         for index in range(per_task):
             chosen = (task.paraphrases if instructions == "all"
                       else (sampled_paraphrase(label, index, task.paraphrases),))

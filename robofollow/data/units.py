@@ -19,7 +19,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from robofollow.build import Compiled
+from robofollow.build.pipeline import Compiled
 from robofollow.data.jobs import MAX_ATTEMPTS, DemoJob
 from robofollow.data.sinks import ArraySink, FrameSink, VideoSink
 from robofollow.errors import RoboFollowError
@@ -107,14 +107,14 @@ class UnitRecorder:
 
     def _attempt(self, job: DemoJob, attempt: int, folder: Path) -> dict:
         """Run one seed into `folder`; the demo record, or RejectedAttemptError."""
-        options, scene = self.options, self.compiled.spec.scenes[job.scene]
+        options = self.options
         with ExitStack() as stack:
             if options.format == "hdf5":
                 h5 = stack.enter_context(h5py.File(folder / "episode.hdf5", "w"))
                 sink: FrameSink = ArraySink(h5, options.width, options.height)
             else:
                 sink = VideoSink(folder, options.width, options.height, CONTROL_HZ)
-            run = self.runner.run(scene, job.episode(attempt), sink)
+            run = self.runner.run(self.compiled, job.episode(attempt), sink)
             sink.close()
             if not run.achieved:
                 raise RejectedAttemptError("the oracle scored it incomplete: "

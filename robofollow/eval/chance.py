@@ -13,18 +13,18 @@ followed_intent   the Intent earned by perfectly following the instruction the p
 
 from __future__ import annotations
 
-from robofollow.build import Compiled
-from robofollow.compiler.behaviour import Behaviour
+from robofollow.build.episode import Episode
+from robofollow.build.pipeline import Compiled
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
 from robofollow.eval.reference import available_behaviours, understood
 from robofollow.oracle.chance import guessing, intent_if_performed
 
 
-def references(compiled: Compiled, episode: dict, instruction: str) -> dict:
-    scene = compiled.spec.scenes[episode["scene"]]
-    world = World(scene, episode["layout"])
-    asked = Behaviour.model_validate(episode["behaviour"])
+def references(compiled: Compiled, episode: Episode, instruction: str) -> dict:
+    scene = compiled.spec.scenes[episode.scene]
+    world = World(scene, episode.layout)
+    asked = episode.behaviour
     training = compiled.candidates(scene.id)
     chance = guessing(asked, [training[label] for label in available_behaviours(world, training)])
     try:

@@ -1,5 +1,5 @@
 """One evaluation episode, as upstream's protocol: reset the episode's layout with its seed,
-then query the policy for action chunks and execute them (at most CHUNK_LIMIT actions of each)
+then query the policy for action chunks and execute them (at most CHUNK actions of each)
 until the fixed action budget is spent; nothing ends an episode early except a policy failure
 (an exception, SystemExit included, a chunk that is not [T, 14] finite numbers or, with a time
 limit, a call that runs past it), which is recorded; KeyboardInterrupt still stops the caller.
@@ -13,18 +13,15 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robofollow.build import Compiled
+from robofollow.build.episode import Episode
+from robofollow.build.pipeline import Compiled
 from robofollow.eval.deadline import PolicyTimeout, check_deadline, deadline
 from robofollow.eval.policy import BadActionError, Policy, Privileged, validate_actions
 from robofollow.oracle.results import EpisodeScore
-from robofollow.scoring import score_recording
-from robofollow.sim import robot
-from robofollow.sim.recorder import Recorder
+from robofollow.sim import CHUNK, MAX_STEPS, robot
+from robofollow.sim.rollout import Rollout
 from robofollow.sim.stage import Stage
 from robofollow.trajectory import Trajectory
-
-ACTION_BUDGET = 500  # control steps per episode (upstream: 10 chunks x 50 actions)
-CHUNK_LIMIT = 50  # actions executed from each chunk before the policy is asked again
 
 
 @dataclass
@@ -60,51 +57,30 @@ def _failure(failure: BaseException) -> str:
     return f"the policy raised {type(failure).__name__}: {failure}"
 
 
-class Rollout:
-    """An episode in progress: its layout reset with its seed, the recording from the home
-    pose, and the chunks executed so far within the budget (`done` once it is spent)."""
+class PolicyRollout(Rollout):
+    """A policy's episode in progress: the policy's calls so far and the executed actions whose
+    targets were past a joint limit; each chunk runs at most CHUNK actions."""
 
-    def __init__(self, compiled: Compiled, stage: Stage, episode: dict, render: bool,
-                 budget: int = ACTION_BUDGET, on_frame=None):
-        self.compiled, self.stage, self.episode = compiled, stage, episode
-        self.budget, self.on_frame = budget, on_frame
-        self.scene = compiled.spec.scenes[episode["scene"]]
-        self.sim = stage.simulation(self.scene, episode["layout"], render=render)
-        self.world = self.sim.reset(episode["seed"])
-        self.recorder = Recorder(self.sim,
-                                 {k: episode[k] for k in ("episode", "scene", "layout", "seed")})
-        self.steps = self.queries = self.clipped = 0
-        self._record(robot.home_state())
+    def __init__(self, compiled: Compiled, stage: Stage, episode: Episode, render: bool,
+                 budget: int = MAX_STEPS, on_frame=None):
+        super().__init__(compiled, stage, episode, render, budget, on_frame)
+        self.queries = self.clipped = 0
 
-    @property
-    def done(self) -> bool:
-        return self.steps >= self.budget
-
-    def _record(self, action: np.ndarray) -> None:
-        self.recorder.frame(action)
-        if self.on_frame is not None:
-            self.on_frame(self.stage)
-
-    def execute(self, chunk: np.ndarray, past: np.ndarray) -> None:
-        """Run at most CHUNK_LIMIT actions of a validated chunk (`validate_actions`), within
-        the budget."""
-        executed = min(CHUNK_LIMIT, self.budget - self.steps, len(chunk))
+    def execute_chunk(self, chunk: np.ndarray, past: np.ndarray) -> None:
+        """Run at most CHUNK actions of a validated chunk (`validate_actions`), within the
+        budget."""
+        executed = self.execute(chunk[:CHUNK])
         self.clipped += int(past[:executed].sum())
-        for action in chunk[:executed]:
-            self.sim.step(action)
-            self._record(action)
-            self.steps += 1
 
-    def finish(self, error: str | None, began: float) -> EpisodeRun:
+    def result(self, error: str | None, began: float) -> EpisodeRun:
         """The recording scored by the oracle; `began`: perf_counter at the episode's start."""
-        trajectory = self.recorder.trajectory()
-        return EpisodeRun(score_recording(self.compiled, self.episode, trajectory), trajectory,
-                          self.steps, self.queries, self.clipped, error,
+        score, trajectory = self.finish()
+        return EpisodeRun(score, trajectory, self.steps, self.queries, self.clipped, error,
                           time.perf_counter() - began)
 
 
-def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy | None,
-                instruction: str | None = None, budget: int = ACTION_BUDGET,
+def run_episode(compiled: Compiled, stage: Stage, episode: Episode, policy: Policy | None,
+                instruction: str | None = None, budget: int = MAX_STEPS,
                 on_frame=None, timeout: float | None = None,
                 failed: str | None = None) -> EpisodeRun:
     """Evaluate `policy` on a compiled episode. `instruction` replaces the episode's (the
@@ -124,12 +100,12 @@ def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy 
         except BaseException as failure:  # noqa: B036 (e.g. its server is gone, SystemExit)
             error = f"reset: {_failure(failure)}"  # the episode is scored as it stands
     uses = policy.uses if policy is not None else frozenset()
-    rollout = Rollout(compiled, stage, episode, "images" in uses or on_frame is not None,
+    rollout = PolicyRollout(compiled, stage, episode, "images" in uses or on_frame is not None,
                       budget, on_frame)
     privileged = (Privileged(rollout.sim, rollout.world, rollout.scene,
-                             compiled.candidates(rollout.scene.id), episode["seed"])
+                             compiled.candidates(rollout.scene.id), episode.seed)
                   if "privileged" in uses else None)
-    text = episode["instruction"] if instruction is None else instruction
+    text = episode.instruction if instruction is None else instruction
     while error is None and not rollout.done:
         rollout.queries += 1
         seen = observation(uses, stage, text, rollout.steps, privileged)
@@ -142,5 +118,5 @@ def run_episode(compiled: Compiled, stage: Stage, episode: dict, policy: Policy 
         except BaseException as failure:  # noqa: B036 (a policy bug or exit ends its episode,
             error = f"step {rollout.steps}: {_failure(failure)}"  # not the evaluation)
             break
-        rollout.execute(chunk, past)
-    return rollout.finish(error, began)
+        rollout.execute_chunk(chunk, past)
+    return rollout.result(error, began)

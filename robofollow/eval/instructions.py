@@ -6,7 +6,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from robofollow.build import Compiled
+from robofollow.build.episode import Episode
+from robofollow.build.pipeline import Compiled
+from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import ground
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
@@ -14,42 +16,44 @@ from robofollow.errors import RoboFollowError
 INSTRUCTION_MODES = ("normal", "empty", "shuffled")
 
 
-def given_instruction(compiled: Compiled, episode: dict, mode: str) -> str:
+def given_instruction(compiled: Compiled, episode: Episode, mode: str) -> str:
     if mode == "normal":
-        return episode["instruction"]
+        return episode.instruction
     if mode == "empty":
         return ""
     if mode == "shuffled":
-        options = [text for text, behaviour in _groundings(compiled, episode["scene"],
-                                                           episode["layout"])
-                   if behaviour["steps"] != episode["behaviour"]["steps"]]
+        options = [text for text, behaviour in _groundings(compiled, episode.scene,
+                                                           episode.layout)
+                   if behaviour.steps != episode.behaviour.steps]
         if not options:
-            raise RoboFollowError(f"{episode['episode']}: no other training instruction of "
-                                  f"{episode['scene']} grounds on layout {episode['layout']}")
-        return options[int(np.random.default_rng(episode["seed"]).integers(len(options)))]
+            raise RoboFollowError(f"{episode.id}: no other training instruction of "
+                                  f"{episode.scene} grounds on layout {episode.layout}")
+        return options[int(np.random.default_rng(episode.seed).integers(len(options)))]
     raise ValueError(f"instruction mode must be one of {INSTRUCTION_MODES}, got {mode!r}")
 
 
-_GROUNDINGS: dict[tuple[str, str, str], tuple[tuple[str, dict], ...]] = {}
+_GROUNDINGS: dict[tuple[str, str, str], tuple[tuple[str, Behaviour], ...]] = {}
 
 
-def _groundings(compiled: Compiled, scene_id: str, layout: str) -> tuple[tuple[str, dict], ...]:
+def _groundings(compiled: Compiled, scene_id: str, layout: str
+                ) -> tuple[tuple[str, Behaviour], ...]:
     """Every training paraphrase of the scene that grounds on the layout (nominal poses), with
-    the behaviour it asks for there (as JSON, like an episode's); computed once per layout."""
+    the behaviour it asks for there; computed once per layout."""
     key = (compiled.spec.digest, scene_id, layout)
     if key not in _GROUNDINGS:
         _GROUNDINGS[key] = _ground_all(compiled, scene_id, layout)
     return _GROUNDINGS[key]
 
 
-def _ground_all(compiled: Compiled, scene_id: str, layout: str) -> tuple[tuple[str, dict], ...]:
+def _ground_all(compiled: Compiled, scene_id: str, layout: str
+                ) -> tuple[tuple[str, Behaviour], ...]:
     scene = compiled.spec.scenes[scene_id]
     world = World(scene, layout)
     found = []
     for task in scene.tasks:
         for text, form in zip(task.paraphrases, task.forms, strict=True):
             try:
-                found.append((text, ground(form, world).model_dump(mode="json")))
+                found.append((text, ground(form, world)))
             except RoboFollowError:
                 continue
     return tuple(found)

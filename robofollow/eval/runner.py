@@ -31,7 +31,9 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from robofollow.build import Compiled, all_episodes
+from robofollow.build.episode import Episode
+from robofollow.build.pipeline import Compiled
+from robofollow.build.rounds import all_episodes
 from robofollow.errors import RoboFollowError
 from robofollow.eval.chance import references
 from robofollow.eval.episode import EpisodeRun, run_episode
@@ -84,26 +86,26 @@ class EvalOptions:
                     tasks=list(self.tasks))
 
 
-def select_episodes(compiled: Compiled, options: EvalOptions) -> list[dict]:
-    chosen = [e for e in all_episodes(compiled) if e["scene"] in options.scenes
-              and e["level"] in options.levels and e["round"] <= options.rounds
-              and (not options.tasks or e["task"] in options.tasks)]
+def select_episodes(compiled: Compiled, options: EvalOptions) -> list[Episode]:
+    chosen = [e for e in all_episodes(compiled) if e.scene in options.scenes
+              and e.level in options.levels and e.round <= options.rounds
+              and (not options.tasks or e.task in options.tasks)]
     if options.sample:
         kept = set()
         for tasks in _tasks_by_cell(chosen).values():
             step = len(tasks) / min(options.sample, len(tasks))
             kept.update(tasks[int(i * step)] for i in range(min(options.sample, len(tasks))))
-        chosen = [e for e in chosen if e["task"] in kept]
+        chosen = [e for e in chosen if e.task in kept]
     return chosen
 
 
-def _tasks_by_cell(episodes: list[dict]) -> dict[tuple[str, str], list[str]]:
+def _tasks_by_cell(episodes: list[Episode]) -> dict[tuple[str, str], list[str]]:
     """Each scene x level's task ids, in the compiled order."""
     cells: dict[tuple[str, str], list[str]] = {}
     for e in episodes:
-        tasks = cells.setdefault((e["scene"], e["level"]), [])
-        if e["task"] not in tasks:
-            tasks.append(e["task"])
+        tasks = cells.setdefault((e.scene, e.level), [])
+        if e.task not in tasks:
+            tasks.append(e.task)
     return cells
 
 
@@ -111,17 +113,17 @@ def _digest(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()[:16]
 
 
-def result_record(episode: dict, instruction: str, run: EpisodeRun) -> dict:
+def result_record(episode: Episode, instruction: str, run: EpisodeRun) -> dict:
     """An episode's line in RUN/episodes.jsonl. `instruction` is the one given; where it is
     not the task's own (the empty and shuffled controls), `task_instruction` holds that."""
     score, trajectory = run.score, run.trajectory
     start = trajectory.positions[0].tobytes() + trajectory.quaternions[0].tobytes()
-    own = {} if instruction == episode["instruction"] else {
-        "task_instruction": episode["instruction"]}
+    own = {} if instruction == episode.instruction else {
+        "task_instruction": episode.instruction}
     return {
-        "episode": episode["episode"], "scene": episode["scene"], "level": episode["level"],
-        "task": episode["task"], "layout": episode["layout"], "round": episode["round"],
-        "seed": episode["seed"], "instruction": instruction, **own,
+        "episode": episode.id, "scene": episode.scene, "level": episode.level,
+        "task": episode.task, "layout": episode.layout, "round": episode.round,
+        "seed": episode.seed, "instruction": instruction, **own,
         "intent_score": score.intent_score, "execution_score": score.execution_score,
         "complete": score.complete, "other_branch": score.other_branch,
         "stages": [s.model_dump(mode="json") for s in score.stages],
@@ -129,11 +131,11 @@ def result_record(episode: dict, instruction: str, run: EpisodeRun) -> dict:
                                if score.executed_behaviour else None),
         "steps": run.steps, "queries": run.queries, "clipped": run.clipped, "error": run.error,
         "seconds": round(run.seconds, 3),
-        "hashes": {"episode": episode["hash"], "instruction": _digest(instruction.encode()),
+        "hashes": {"episode": episode.hash, "instruction": _digest(instruction.encode()),
                    "initial_state": _digest(start)}}
 
 
-def episode_record(compiled: Compiled, episode: dict, instruction: str, run: EpisodeRun) -> dict:
+def episode_record(compiled: Compiled, episode: Episode, instruction: str, run: EpisodeRun) -> dict:
     """The episode's full record: `result_record` with its chance and followed references."""
     return dict(result_record(episode, instruction, run),
                 **references(compiled, episode, instruction))
@@ -147,7 +149,7 @@ class Evaluator:
         self.policy = build_policy(options.policy)
         self.stage = Stage()
 
-    def __call__(self, episode: dict) -> dict:
+    def __call__(self, episode: Episode) -> dict:
         instruction = given_instruction(self.compiled, episode, self.options.instruction_mode)
         frames: list = []
         on_frame = ((lambda stage: frames.append(side_by_side(stage.cameras.images())))
@@ -156,7 +158,7 @@ class Evaluator:
                           on_frame=on_frame, timeout=self.options.policy_timeout)
         record = episode_record(self.compiled, episode, instruction, run)
         if frames and (self.options.video == "all" or not run.score.complete):
-            name = episode["episode"].replace("/", "__").replace("#", "_") + ".mp4"
+            name = episode.id.replace("/", "__").replace("#", "_") + ".mp4"
             path = self.out / "videos" / name
             try:
                 path.parent.mkdir(exist_ok=True)
@@ -200,7 +202,7 @@ class _LostEpisodes:
         self.compiled, self.options = compiled, options
         self.stage: Stage | None = None
 
-    def __call__(self, episode: dict, what: str) -> dict:
+    def __call__(self, episode: Episode, what: str) -> dict:
         self.stage = self.stage or Stage()
         instruction = given_instruction(self.compiled, episode, self.options.instruction_mode)
         run = run_episode(self.compiled, self.stage, episode, None, instruction,
@@ -263,7 +265,7 @@ def evaluate(compiled: Compiled, out: Path, options: EvalOptions, workers: int =
         results_path = out / RESULTS
         finished = (drop_corrupt_lines if drop_corrupt else read_results)(results_path)
         done = {r["episode"] for r in finished}
-        todo = [e for e in episodes if e["episode"] not in done]
+        todo = [e for e in episodes if e.id not in done]
         isolate = _isolated(options.policy) if isolate is None else isolate
         lost = _LostEpisodes(compiled, options)
         bar = tqdm(total=len(episodes), initial=len(episodes) - len(todo), desc="evaluating",

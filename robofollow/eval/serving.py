@@ -23,7 +23,7 @@ from importlib.metadata import version
 
 import numpy as np
 
-from robofollow.build import Compiled
+from robofollow.build.pipeline import Compiled
 from robofollow.errors import RoboFollowError
 from robofollow.eval.loading import load_policy
 from robofollow.eval.policy import ACTION_WIDTH, Privileged, server_text

@@ -38,7 +38,7 @@ import time
 
 import numpy as np
 
-from robofollow.build import Compiled
+from robofollow.build.pipeline import Compiled
 from robofollow.eval.policy import (
     PolicyConnectionError,
     PolicyServerError,

@@ -10,42 +10,43 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from robofollow.build import compile_specs
+from robofollow.build.episode import Episode
+from robofollow.build.pipeline import compile_specs
 from robofollow.workers import results
 
 
-def _failed(episode: dict, reason: str) -> dict:
-    return {"episode": episode["episode"], "achieved": False, "steps": 0, "seconds": 0.0,
+def _failed(episode: Episode, reason: str) -> dict:
+    return {"episode": episode.id, "achieved": False, "steps": 0, "seconds": 0.0,
             "intent_score": 0.0, "execution_score": 0.0, "reasons": [reason],
-            "full": False, "scene": episode["scene"], "level": episode["level"]}
+            "full": False, "scene": episode.scene, "level": episode.level}
 
 
 class _Verifier:
-    """One worker process: the compiled scenes, then episodes one at a time."""
+    """One worker process: the compiled benchmark, then episodes one at a time."""
 
     def __init__(self, specs: str):
-        self.scenes = compile_specs(Path(specs)).spec.scenes
+        self.compiled = compile_specs(Path(specs))
 
-    def __call__(self, episode: dict) -> dict:
+    def __call__(self, episode: Episode) -> dict:
         from robofollow.sim.rollout import run_expert
 
         try:
-            result = run_expert(self.scenes[episode["scene"]], episode).summary()
+            result = run_expert(self.compiled, episode).summary()
         except Exception as error:  # a crash is a failure with its cause, not a lost episode
             return _failed(episode, f"{type(error).__name__}: {error}")
         full = (result["achieved"]
                 and min(result["intent_score"], result["execution_score"]) >= 0.99)
-        return dict(result, full=full, scene=episode["scene"], level=episode["level"])
+        return dict(result, full=full, scene=episode.scene, level=episode.level)
 
     def close(self) -> None:
         pass
 
 
-def _lost(episode: dict, what: str) -> dict:
+def _lost(episode: Episode, what: str) -> dict:
     return _failed(episode, f"the worker process {what} during the episode")
 
 
-def run_expert_episodes(specs: Path, episodes: list[dict], workers: int,
+def run_expert_episodes(specs: Path, episodes: list[Episode], workers: int,
                         quiet: bool = False) -> list[dict]:
     """Each episode's expert result (`full`, `reasons`, scores, `scene`, `level`), sorted by
     episode id; `workers` supervised processes, each compiling `specs` once."""

@@ -35,7 +35,7 @@ from websockets.frames import CloseCode
 from websockets.sync.client import connect
 from websockets.sync.server import serve
 
-from robofollow.build import Compiled
+from robofollow.build.pipeline import Compiled
 from robofollow.eval.policy import (
     PolicyConnectionError,
     PolicyServerError,

@@ -25,12 +25,15 @@ from __future__ import annotations
 import time
 from collections.abc import Iterable, Mapping
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from vla_eval.benchmarks.base import StepBenchmark, StepResult
 from vla_eval.recording import NullEpisodeRecorder
 from vla_eval.render import configure_mujoco_render
 from vla_eval.specs import IMAGE_RGB, LANGUAGE, STATE_JOINT, DimSpec
+
+if TYPE_CHECKING:  # (MuJoCo is imported only after configure_mujoco_render)
+    from robofollow.build.episode import Episode
 
 _ALL_ROUNDS = 10 ** 9
 IMAGE_POLICY_USES = frozenset({"state", "instruction", "images"})  # what a model server reads
@@ -61,18 +64,18 @@ class RoboFollowBenchmark(StepBenchmark):
                  width: int = 320, height: int = 240) -> None:
         super().__init__()
         # Imported here, after configure_render: MuJoCo binds its GL backend when imported.
-        from robofollow.build import compile_specs
+        from robofollow.build.pipeline import compile_specs
         from robofollow.compiler.spec import LEVELS
-        from robofollow.eval.episode import ACTION_BUDGET
         from robofollow.eval.instructions import INSTRUCTION_MODES
         from robofollow.eval.runner import EvalOptions, select_episodes
         from robofollow.resources import builtin_specs
+        from robofollow.sim import MAX_STEPS
         from robofollow.sim.stage import Stage
 
         if instruction_mode not in INSTRUCTION_MODES:
             raise ValueError(f"instruction_mode must be one of {INSTRUCTION_MODES}, got "
                              f"{instruction_mode!r}")
-        self.budget = ACTION_BUDGET if budget is None else int(budget)
+        self.budget = MAX_STEPS if budget is None else int(budget)
         if self.budget < 1:
             raise ValueError(f"budget must be at least 1 control step, got {budget}")
         self.instruction_mode = instruction_mode
@@ -87,18 +90,18 @@ class RoboFollowBenchmark(StepBenchmark):
         options = EvalOptions("vla-eval", tuple(scenes or compiled.spec.scenes),
                               tuple(levels or LEVELS), _ALL_ROUNDS, instruction_mode, "none",
                               compiled.spec.digest, sample=sample)
-        self._rounds: dict[str, list[dict]] = {}
+        self._rounds: dict[str, list[Episode]] = {}
         for episode in select_episodes(compiled, options):
-            self._rounds.setdefault(episode["task"], []).append(episode)
+            self._rounds.setdefault(episode.task, []).append(episode)
         self._recorder = NullEpisodeRecorder()  # start_episode() sets the run's
         self._instruction, self._error, self._began = "", None, 0.0
-        self._rollout = None  # the episode in progress (robofollow.eval.episode.Rollout)
+        self._rollout = None  # the episode in progress (robofollow.eval.episode.PolicyRollout)
 
     # -- tasks -------------------------------------------------------------------------------
 
     def get_tasks(self) -> list[dict[str, Any]]:
-        return [{"name": task, "suite": f"{rounds[0]['scene']}/{rounds[0]['level']}",
-                 "scene": rounds[0]["scene"], "level": rounds[0]["level"],
+        return [{"name": task, "suite": f"{rounds[0].scene}/{rounds[0].level}",
+                 "scene": rounds[0].scene, "level": rounds[0].level,
                  "rounds": len(rounds)} for task, rounds in self._rounds.items()]
 
     def get_metadata(self) -> dict[str, Any]:
@@ -110,7 +113,7 @@ class RoboFollowBenchmark(StepBenchmark):
 
     def reset(self, task: dict[str, Any]) -> Any:
         """The episode's start, as robofollow.eval.episode.run_episode sets it up."""
-        from robofollow.eval.episode import Rollout
+        from robofollow.eval.episode import PolicyRollout
         from robofollow.eval.instructions import given_instruction
 
         rounds, index = self._rounds[task["name"]], int(task.get("episode_idx", 0))
@@ -120,7 +123,7 @@ class RoboFollowBenchmark(StepBenchmark):
         episode = rounds[index]
         self._instruction = given_instruction(self.compiled, episode, self.instruction_mode)
         self._began, self._error = time.perf_counter(), None
-        self._rollout = Rollout(self.compiled, self.stage, episode, True, self.budget)
+        self._rollout = PolicyRollout(self.compiled, self.stage, episode, True, self.budget)
         return None
 
     def step(self, action: dict[str, Any]) -> StepResult:
@@ -133,7 +136,7 @@ class RoboFollowBenchmark(StepBenchmark):
         except BadActionError as failure:  # a policy failure: the episode is scored as it stands
             self._error = f"step {rollout.steps}: {failure}"
             return StepResult(None, 0.0, True, {})
-        rollout.execute(chunk, past)
+        rollout.execute_chunk(chunk, past)
         return StepResult(None, 0.0, rollout.done, {})
 
     def make_obs(self, raw_obs: Any, task: dict[str, Any]) -> dict[str, Any]:
@@ -150,7 +153,7 @@ class RoboFollowBenchmark(StepBenchmark):
         """The `robofollow eval` episode record, scored by the oracle, with success."""
         from robofollow.eval.runner import episode_record
 
-        run = self._rollout.finish(self._error, self._began)
+        run = self._rollout.result(self._error, self._began)
         record = episode_record(self.compiled, self._rollout.episode, self._instruction, run)
         return {"success": bool(record["complete"]), **record}
 

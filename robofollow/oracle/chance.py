@@ -60,7 +60,7 @@ def _intent_checks(behaviour: Behaviour, profile: ScoringProfile) -> tuple[list,
     work, finish = [], None
     for _, node, _ in scoring_nodes(behaviour, profile):
         check = (node["weight"], json.dumps([node["name"], node["arm"], node["intent"]],
-                                            sort_keys=True))
+                                            sort_keys=True, default=dict))  # (read-only views)
         if node["name"] == "finish":
             finish = check
         else:

@@ -26,6 +26,7 @@ import numpy as np
 from gymnasium import spaces
 
 from robofollow import compiled_cache
+from robofollow.build.episode import Episode
 from robofollow.resources import builtin_specs
 from robofollow.sim import MAX_STEPS, robot
 from robofollow.sim.cameras import CAMERA_NAMES, Cameras
@@ -61,12 +62,15 @@ class RoboFollowEnv(gym.Env):
                                        robot.ACTION_HIGH.astype(np.float32), dtype=np.float32)
         self.stage = Stage(width, height)  # the current layout's simulation and cameras
         self.recorder: Recorder | None = None
-        self.episode: dict | None = self.default_episode
+        self.episode: Episode | None = self.default_episode
         self.steps = self.clipped = 0  # clipped: actions with a target past a joint limit
         self.command = robot.home_state()
 
-    def _episode(self, episode: str | dict) -> dict:
-        return self.benchmark.record(episode) if isinstance(episode, str) else episode
+    def _episode(self, episode: str | dict | Episode) -> Episode:
+        """An episode given by id, as a compiled episode, or as its JSON record."""
+        if isinstance(episode, str):
+            return self.benchmark.record(episode)
+        return Episode.model_validate(episode) if isinstance(episode, dict) else episode
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
@@ -74,13 +78,13 @@ class RoboFollowEnv(gym.Env):
         if episode is None:
             episode = self.choices[self.np_random.integers(len(self.choices))]
         self.episode = self._episode(episode)
-        scene = self.benchmark.spec.scenes[self.episode["scene"]]
-        self.stage.simulation(scene, self.episode["layout"], render=True)
-        jitter_seed = self.episode["seed"] if seed is None else seed
+        scene = self.benchmark.spec.scenes[self.episode.scene]
+        self.stage.simulation(scene, self.episode.layout, render=True)
+        jitter_seed = self.episode.seed if seed is None else seed
         self.sim.reset(jitter_seed)
         self.steps, self.clipped, self.command = 0, 0, robot.home_state()
-        self.recorder = Recorder(self.sim, {"episode": self.episode["episode"],
-                                            "scene": scene.id, "layout": self.episode["layout"],
+        self.recorder = Recorder(self.sim, {"episode": self.episode.id,
+                                            "scene": scene.id, "layout": self.episode.layout,
                                             "seed": jitter_seed})
         self.recorder.frame(self.command)
         return self._observation(), self._info()
@@ -101,11 +105,11 @@ class RoboFollowEnv(gym.Env):
 
     def _observation(self) -> dict:
         return {"images": self.cameras.images(), "state": robot.observed_state(self.sim.state()),
-                "instruction": self.episode["instruction"]}
+                "instruction": self.episode.instruction}
 
     def _info(self) -> dict:
-        return {"episode": self.episode["episode"], "scene": self.episode["scene"],
-                "level": self.episode["level"], "layout": self.episode["layout"],
+        return {"episode": self.episode.id, "scene": self.episode.scene,
+                "level": self.episode.level, "layout": self.episode.layout,
                 "seed": self.recorder.meta["seed"], "step": self.steps,
                 "clipped": self.clipped}
 

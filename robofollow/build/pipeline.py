@@ -1,0 +1,93 @@
+"""Compile the benchmark: specs -> checked training tasks -> L0-L3 splits -> audit."""
+
+from __future__ import annotations
+
+import json
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from types import MappingProxyType
+
+from robofollow.audit.splits import audit, findings
+from robofollow.audit.task_list import listed_tests
+from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.spec import Spec
+from robofollow.compiler.spec_loader import load_partial, spec_files
+from robofollow.compiler.splits import Splits, generate
+from robofollow.compiler.training import training_behaviours
+from robofollow.errors import SpecErrors
+
+
+@dataclass(frozen=True)
+class Compiled:
+    """A compiled benchmark. Frozen all through (the audit is kept as text and read afresh):
+    one compile is shared by every caller in a process (`compile_specs` caches it)."""
+
+    spec: Spec
+    splits: Splits
+    training: Mapping[str, Behaviour]  # every training task's behaviour, by label (read-only)
+    audit_json: str  # the audit, as audit.json holds it
+
+    def __post_init__(self):
+        object.__setattr__(self, "training", MappingProxyType(dict(self.training)))
+
+    def __reduce__(self):  # (a read-only mapping does not pickle; worker processes get copies)
+        return Compiled, (self.spec, self.splits, dict(self.training), self.audit_json)
+
+    @property
+    def report(self) -> dict:
+        """The audit (entropy, groups, counts, split rules, findings): a fresh copy."""
+        return json.loads(self.audit_json)
+
+    def candidates(self, scene: str) -> dict[str, Behaviour]:
+        """The scene's training behaviours by label: what 'did instead' is matched against."""
+        return {t.label: self.training[t.label] for t in self.spec.scenes[scene].tasks}
+
+
+def compile_specs(specs: Path | list[Path]) -> Compiled:
+    """Load, check, generate and audit; raises SpecErrors on bad specs."""
+    if isinstance(specs, Path):
+        return _compile_cached(Path(os.path.realpath(specs)), _mtimes(specs))
+    return _compile(specs)
+
+
+def _mtimes(folder: Path) -> tuple:
+    """The state of every spec file the compile reads (the cache key)."""
+    state = []
+    for file in spec_files(folder):
+        try:
+            info = os.stat(file)
+        except OSError:
+            continue
+        state.append((str(file), info.st_mtime_ns, info.st_size, info.st_ino))
+    return tuple(state)
+
+
+@lru_cache(maxsize=4)
+def _compile_cached(specs: Path, _mtimes: tuple) -> Compiled:
+    """One compile per specs folder and file state, per process."""
+    return _compile(specs)
+
+
+def _compile(specs: Path | list[Path]) -> Compiled:
+    """Every error of the specs in one report: loading, training tasks, listed tests (the
+    checks of tasks on layouts that failed to load are skipped rather than repeated)."""
+    loaded = load_partial(specs)
+    if loaded.spec is None:
+        raise SpecErrors(loaded.errors)
+    spec = loaded.spec
+    training, training_errors = training_behaviours(spec, loaded.suspect)
+    listed, test_errors = listed_tests(spec, training, loaded.suspect)
+    errors = loaded.errors + training_errors + test_errors
+    if errors:
+        raise SpecErrors(errors)
+    splits = generate(spec, training)
+    splits = splits.model_copy(update={"tasks": splits.tasks + listed})
+    report = json.dumps(audit(spec, training, splits), indent=1, sort_keys=True) + "\n"
+    return Compiled(spec, splits, training, report)
+
+
+def clean(compiled: Compiled) -> bool:
+    return findings(compiled.report) == 0
