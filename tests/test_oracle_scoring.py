@@ -92,6 +92,24 @@ def test_the_idle_arm_must_keep_out_of_the_work_area(expert):
     assert [s.intent for s in result.stages] == [0.4, 0.4, 0.0]
 
 
+@pytest.mark.parametrize("table", [0.62, 0.88])
+def test_the_work_area_moves_with_the_table(expert, table):
+    """The same episode on a lower or higher table (the whole recording shifted with it): the
+    idle arm resting at home keeps the finish, and the idle arm 5 cm over the table's centre
+    loses it, whatever the table's height."""
+    scene = benchmark().spec.scenes["scene1"]
+    lift = table - scene.table_height
+    moved = scene.model_copy(update={"table_height": table})
+    shifted = edited(expert, positions=expert.positions + [0.0, 0.0, lift],
+                     ee_positions=expert.ee_positions + [0.0, 0.0, lift])
+    finish = score(asked(), shifted, moved).stages[-1]
+    assert finish.intent == finish.weight, finish.reason
+    ee = shifted.ee_positions.copy()
+    ee[40:45, 0] = [0.0, 0.0, table + 0.05]  # the left (idle) arm just over the table centre
+    result = score(asked(), edited(shifted, ee_positions=ee), moved)
+    assert "idle left arm entered the work area at frame 40" in result.stages[-1].reason
+
+
 def test_closing_again_after_finishing_loses_the_finish(expert):
     state = expert.state.copy()
     state[-3:, 13] = 0.0  # the measured fingers shut at home, holding nothing

@@ -11,6 +11,7 @@ from __future__ import annotations
 from typing import Literal
 
 from robofollow.compiler.model import Model
+from robofollow.compiler.spec import TABLE_HEIGHT
 from robofollow.compiler.world import RELATION_RANGE
 
 
@@ -82,8 +83,10 @@ class ScoringProfile(Model):
     disturb_tolerance: float = 0.02  # m: another object moves at most this in the episode
     struck_tolerance: float = 0.03  # m: a push's target, which the pushed object may strike
     topple_deg: float = 45.0  # deg: or tilts at most this (spheres excepted)
+    # m: the x, y, z box the idle arm stays out of, z from the table top up 0.26 m, written
+    # for a table at the default height (the scorer moves the band with a scene's table)
     operation_area: tuple[tuple[float, float], tuple[float, float], tuple[float, float]] = (
-        (-0.20, 0.15), (-0.15, 0.15), (0.74, 1.0))  # m: x, y, z box the idle arm stays out of
+        (-0.20, 0.15), (-0.15, 0.15), (TABLE_HEIGHT, TABLE_HEIGHT + 0.26))
 
 
 DEFAULT_PROFILE = ScoringProfile()

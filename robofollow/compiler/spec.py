@@ -14,6 +14,7 @@ from robofollow.compiler.model import Model
 from robofollow.compiler.workspace import TABLE_SIZE
 
 BodyKind = Literal["cube", "slab", "cylinder", "sphere", "label", "bowl"]
+TABLE_HEIGHT = 0.74  # m: the table top's height unless a scene sets it (upstream's)
 Level = Literal["L0", "L1", "L2", "L3"]
 LEVELS: tuple[Level, ...] = ("L0", "L1", "L2", "L3")
 
@@ -152,7 +153,7 @@ class Scene(Model):
     tasks: tuple[Task, ...]
     splits: dict[str, SplitRule]
     tests: tuple[ListedTest, ...] = ()
-    table_height: float = 0.74
+    table_height: float = TABLE_HEIGHT
 
     def jitter_of(self, body: str) -> Jitter:
         return self.jitter.get(body) or self.jitter.get("*") or Jitter()

@@ -25,10 +25,9 @@ from robofollow.compiler.spec import Scene
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
 from robofollow.eval.policy import Privileged
-from robofollow.sim import robot
+from robofollow.sim import CHUNK, robot
 from robofollow.sim.expert import Expert
 
-CHUNK = 50  # actions returned per call, as upstream's action chunks
 RANDOM_REACH = 0.5  # rad: the random policy's targets lie this far around home at most
 RANDOM_MOVE_STEPS = 25  # control steps per random motion
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robofollow.compiler.spec import TABLE_HEIGHT
 from robofollow.compiler.world import DIRECTIONS
 from robofollow.oracle import predicates as P
 from robofollow.oracle.instead import where
@@ -519,7 +520,9 @@ def _idle(rec: Recording, arm: int, name: str, p: dict) -> list[str]:
     attempt = rec.first_attempt(arm, kinds=GRASPING)
     if attempt is not None:
         problems.append(f"the idle {name} arm {attempt.words(rec.bodies)}")
-    entered = P.first_true(P.inside_box(rec.ee[:, arm], p["operation_area"]))
+    area = np.array(p["operation_area"], dtype=float)
+    area[2] += rec.scene.table_height - TABLE_HEIGHT  # (the z band moves with the table)
+    entered = P.first_true(P.inside_box(rec.ee[:, arm], area))
     if entered is not None:
         problems.append(f"the idle {name} arm entered the work area at frame {entered}")
     return problems
