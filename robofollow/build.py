@@ -30,7 +30,8 @@ from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.goals import goal_graph, graph_to_dict
 from robofollow.compiler.plans import plan
 from robofollow.compiler.spec import LEVELS, Spec
-from robofollow.compiler.spec_loader import load_partial, spec_files
+from robofollow.compiler.spec_files import spec_files
+from robofollow.compiler.spec_loader import load_partial
 from robofollow.compiler.splits import Splits, TestTask, episode_seed, generate
 from robofollow.compiler.training import training_behaviours
 from robofollow.compiler.world import World
@@ -84,8 +85,8 @@ def _compile(specs: Path | list[Path]) -> Compiled:
     if loaded.spec is None:
         raise SpecErrors(loaded.errors)
     spec = loaded.spec
-    training, training_errors = training_behaviours(spec, loaded.suspect)
-    listed, test_errors = listed_tests(spec, training, loaded.suspect)
+    training, training_errors = training_behaviours(spec, loaded.sources, loaded.suspect)
+    listed, test_errors = listed_tests(spec, training, loaded.sources, loaded.suspect)
     errors = loaded.errors + training_errors + test_errors
     if errors:
         raise SpecErrors(errors)
