@@ -8,10 +8,11 @@ from __future__ import annotations
 
 import math
 
-from lark import Token, Tree
+from lark import Token
 
 from robofollow.compiler.spec import MAX_STACK, Body, Jitter, Layout, Placed
 from robofollow.compiler.spec_checks import Checks
+from robofollow.compiler.spec_syntax import Coordinates, LayoutNode, LayoutOp
 from robofollow.compiler.workspace import table_bounds
 
 BOWL_FLOOR = 0.005  # m: height of a bowl's inner floor above its bottom
@@ -31,14 +32,14 @@ class LayoutResolver:
         self.points = points
         self.bad_points = bad_points
         self.table = table
-        self.raw: dict[str, Tree] = {}
+        self.raw: dict[str, LayoutNode] = {}
         self.done: dict[str, dict[str, tuple] | None] = {}
         self.reported: set[tuple] = set()  # geometry problems already reported (once each)
         self.unposed: set[str] = set()  # layouts whose bodies could not be posed
 
-    def resolve(self, nodes: list[Tree]) -> dict[str, Layout]:
+    def resolve(self, nodes: list[LayoutNode]) -> dict[str, Layout]:
         for node in nodes:
-            name = node.children[0]
+            name = node.name
             if name in self.raw:
                 self.checks.error("duplicate-layout", f"layout {name!s} is defined twice", name)
             self.raw[str(name)] = node
@@ -55,7 +56,7 @@ class LayoutResolver:
             for layout in reversed(chain):
                 base = self.base(layout)
                 # derived from a layout that could not be posed: fails quietly if it also fails
-                placed = self.poses(self.done[layout], self.raw[layout].children[0],
+                placed = self.poses(self.done[layout], self.raw[layout].name,
                                     quiet=base in self.unposed)
                 if placed is None:
                     self.unposed.add(layout)
@@ -64,8 +65,8 @@ class LayoutResolver:
         return {name: posed[name] for name in self.raw if name in posed}
 
     def base(self, name: str) -> str | None:
-        rest = self.raw[name].children[1:]
-        return str(rest[0]) if rest and isinstance(rest[0], Token) else None
+        base = self.raw[name].base
+        return None if base is None else str(base)
 
     def known(self, token: Token) -> bool:
         if token not in self.bodies:
@@ -73,7 +74,7 @@ class LayoutResolver:
             return False
         return True
 
-    def position(self, node, body: str) -> tuple[float, float] | None:
+    def position(self, node: Coordinates | Token, body: str) -> tuple[float, float] | None:
         if isinstance(node, Token):
             if node in self.bad_points:  # already reported where the point is defined
                 return None
@@ -93,25 +94,26 @@ class LayoutResolver:
             if current in chain:
                 cycle = chain[chain.index(current):] + [current]
                 self.checks.error("layout-cycle", "layouts derive from each other: "
-                                  + " -> ".join(cycle), self.raw[current].children[0])
+                                  + " -> ".join(cycle), self.raw[current].name)
                 return self.fail(chain)
             chain.append(current)
-            rest = self.raw[current].children[1:]
-            if not (rest and isinstance(rest[0], Token)):
+            base = self.raw[current].base
+            if base is None:
                 break  # written as placements
-            if rest[0] not in self.raw:
-                self.checks.error("undefined-layout", f"no layout named {rest[0]!s}", rest[0])
+            if base not in self.raw:
+                self.checks.error("undefined-layout", f"no layout named {base!s}", base)
                 return self.fail(chain)
-            current = str(rest[0])
+            current = str(base)
         for layout in reversed(chain):
-            rest = self.raw[layout].children[1:]
+            base = self.base(layout)
             arrangement: dict[str, tuple] = {}
-            if rest and isinstance(rest[0], Token):
-                inherited = self.done[str(rest[0])]
+            if base is not None:
+                inherited = self.done[base]
                 if inherited is None:
                     return self.fail(chain)
-                arrangement, rest = dict(inherited), rest[1:]
-            applied = [self.apply(op, arrangement) for op in rest]  # every op, every error
+                arrangement = dict(inherited)
+            # every op, every error
+            applied = [self.apply(op, arrangement) for op in self.raw[layout].ops]
             self.done[layout] = arrangement if all(applied) else None
         return self.done[name]
 
@@ -120,42 +122,41 @@ class LayoutResolver:
             self.done.setdefault(layout, None)
         return None
 
-    def apply(self, op: Tree, arrangement: dict[str, tuple]) -> bool:
+    def apply(self, op: LayoutOp, arrangement: dict[str, tuple]) -> bool:
         """Apply one operation; False (reported, or already reported) when it fails."""
-        kind, args = op.data, op.children
-        if not all(self.known(t) for t in args if isinstance(t, Token) and not (
-                kind in ("at", "move") and t is args[1])):
+        kind, other = op.kind, op.other
+        if not (self.known(op.body) and (other is None or self.known(other))):
             return False
-        first = str(args[0])
+        first = str(op.body)
         if kind in ("swap", "move", "remove", "put_on", "put_in") and first not in arrangement:
-            self.checks.error("not-in-layout", f"{first} is not in this layout", args[0])
+            self.checks.error("not-in-layout", f"{first} is not in this layout", op.body)
             return False
         if kind in ("at", "move"):
-            position = self.position(args[1], first)
+            position = self.position(op.position, first)
             if position is None:
                 return False
             arrangement[first] = ("at", position)
         elif kind in ("on", "put_on"):
-            arrangement[first] = ("on", str(args[1]))
+            arrangement[first] = ("on", str(other))
         elif kind in ("in_", "put_in"):
-            if self.bodies[str(args[1])].kind != "bowl":
-                self.checks.error("not-a-container", f"{args[1]!s} is not a bowl", args[1])
+            if self.bodies[str(other)].kind != "bowl":
+                self.checks.error("not-a-container", f"{other!s} is not a bowl", other)
                 return False
-            arrangement[first] = ("in", str(args[1]))
+            arrangement[first] = ("in", str(other))
         elif kind == "swap":
-            second = str(args[1])
+            second = str(other)
             if first == second:
-                self.checks.error("swap-self", f"swap names {first} twice", args[1])
+                self.checks.error("swap-self", f"swap names {first} twice", other)
                 return False
             if second not in arrangement:
-                self.checks.error("not-in-layout", f"{second} is not in this layout", args[1])
+                self.checks.error("not-in-layout", f"{second} is not in this layout", other)
                 return False
             arrangement[first], arrangement[second] = arrangement[second], arrangement[first]
         elif kind == "remove":
             resting = [b for b, (how, where) in arrangement.items() if how != "at" and where == first]
             if resting:
                 self.checks.error("support-removed", f"{', '.join(resting)} rests on {first}",
-                                  args[0])
+                                  op.body)
                 return False
             del arrangement[first]
         return True

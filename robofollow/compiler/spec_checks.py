@@ -6,10 +6,11 @@ from __future__ import annotations
 
 import math
 
-from lark import Token, Tree
+from lark import Token
 
 from robofollow.compiler.spec import Source
 from robofollow.compiler.spec_files import Sources, spec_error
+from robofollow.compiler.spec_syntax import Attribute, Coordinates, Number, Values
 from robofollow.compiler.workspace import table_bounds
 from robofollow.errors import SpecError
 
@@ -22,25 +23,21 @@ class Checks:
         self.sources = Sources()
         self.file = ""
 
-    def error(self, code: str, message: str, where: Token | Tree | Source,
-              length: int | None = None):
-        if isinstance(where, Source):
-            file, line, column, size = where.file, where.line, where.column, 1
-        elif isinstance(where, Token):
-            file, line, column, size = self.file, where.line, where.column, len(where)
-        else:
-            file, line, column = self.file, where.meta.line, where.meta.column
-            size = 1
-        self.errors.append(spec_error(code, message, Source(file=file, line=line, column=column),
-                                      self.sources, length or size))
+    def error(self, code: str, message: str, where: Token | Source, length: int | None = None):
+        """A problem at a place (a token: the length of the token is underlined)."""
+        if isinstance(where, Token):
+            where, length = self.source(where), length or len(where)
+        self.errors.append(spec_error(code, message, where, self.sources, length or 1))
 
     def source(self, token: Token) -> Source:
         return Source(file=self.file, line=token.line, column=token.column)
 
-    def attributes(self, nodes: list[Tree], allowed: tuple[str, ...]) -> dict[str, Tree]:
-        found: dict[str, Tree] = {}
+    def attributes(self, nodes: tuple[Attribute, ...], allowed: tuple[str, ...]
+                   ) -> dict[str, Attribute]:
+        """The attributes given, by name; an unknown or repeated one is reported and left out."""
+        found: dict[str, Attribute] = {}
         for node in nodes:
-            key = node.children[0]
+            key = node.key
             if key not in allowed:
                 self.error("unknown-attribute", f"unknown attribute {key!s} here (expected one "
                                                 f"of: {', '.join(allowed)})", key)
@@ -67,31 +64,30 @@ class Checks:
             return value
         return None
 
-    def number(self, node: Tree, bounds: tuple[float, float], unit: str = "",
+    def number(self, node: Attribute, bounds: tuple[float, float], unit: str = "",
                whole: bool = False) -> float | None:
         """An attribute that takes one number (checked as `checked` does)."""
-        key, value = node.children
-        if value.data != "number":
-            self.error("bad-value", f"{key!s} takes a number", key)
+        if not isinstance(node.value, Number):
+            self.error("bad-value", f"{node.key!s} takes a number", node.key)
             return None
-        return self.checked(value.children[0], str(key), bounds, unit, whole)
+        return self.checked(node.value.token, str(node.key), bounds, unit, whole)
 
-    def numbers(self, node: Tree, count: int, bounds: tuple[float, float],
+    def numbers(self, node: Attribute, count: int, bounds: tuple[float, float],
                 unit: str = "") -> tuple[float, ...] | None:
         """An attribute that takes `count` numbers: (a, b, c)."""
-        key, value = node.children
-        items = value.children if value.data == "values" else [value]
-        if len(items) != count or any(i.data != "number" for i in items):
+        key, value = node.key, node.value
+        items = value.items if isinstance(value, Values) else (value,)
+        if len(items) != count or not all(isinstance(i, Number) for i in items):
             self.error("bad-value", f"{key!s} takes {count} numbers in [{bounds[0]:g}, "
                        f"{bounds[1]:g}]{unit}: ({', '.join(['n'] * count)})", key)
             return None
-        numbers = [self.checked(i.children[0], str(key), bounds, unit) for i in items]
+        numbers = [self.checked(i.token, str(key), bounds, unit) for i in items]
         return None if None in numbers else tuple(numbers)
 
-    def coordinates(self, node: Tree, what: str) -> tuple[float, float] | None:
+    def coordinates(self, node: Coordinates, what: str) -> tuple[float, float] | None:
         """(x, y) as written, or None (reported at the number) when a coordinate is not finite
         or the position is not on the table top."""
-        tokens = node.children
+        tokens = (node.x, node.y)
         values = [float(token) for token in tokens]
         for token, value, axis in zip(tokens, values, "xy", strict=True):
             if not math.isfinite(value):

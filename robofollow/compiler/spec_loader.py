@@ -19,8 +19,6 @@ import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from lark import Token, Tree
-
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Step
 from robofollow.compiler.layouts import LayoutResolver
@@ -52,7 +50,24 @@ from robofollow.compiler.spec import (
 )
 from robofollow.compiler.spec_checks import Checks
 from robofollow.compiler.spec_files import Sources, found_files, spec_text, split_lines
-from robofollow.compiler.spec_syntax import parse_spec
+from robofollow.compiler.spec_syntax import (
+    Attribute,
+    BodyNode,
+    ExpectNode,
+    Interval,
+    JitterNode,
+    LayoutNode,
+    Name,
+    Number,
+    PointNode,
+    SceneNode,
+    SettingNode,
+    SplitNode,
+    TaskNode,
+    TestNode,
+    Values,
+    parse_spec,
+)
 from robofollow.errors import InstructionError, SpecError, SpecErrors
 
 WORDINGS = frozenset({"referents", "routes", "orientation", "conditions", "branches"})
@@ -120,16 +135,16 @@ class _Loader(Checks):
                 continue
             digest.update(path.name.encode() + b"\0" + text.encode() + b"\0")
             self.sources.lines[self.file] = split_lines(text)
-            tree = parse_spec(text, self.file, self.sources)
-            if isinstance(tree, SpecError):
-                self.errors.append(tree)
+            nodes = parse_spec(text, self.file, self.sources)
+            if isinstance(nodes, SpecError):
+                self.errors.append(nodes)
                 continue
-            if not tree.children:
+            if not nodes:
                 self.error("empty-spec", "no scene in this file (a spec file holds one or more "
                            "scene NAME \"title\" { ... } blocks)",
                            Source(file=self.file, line=1, column=1))
-            for node in tree.children:
-                name = node.children[0]
+            for node in nodes:
+                name = node.name
                 if name in self.scene_sources:
                     self.error("duplicate-scene", f"scene {name!s} is also defined at "
                                                   f"{self.scene_sources[name]}", name)
@@ -142,58 +157,58 @@ class _Loader(Checks):
                       self.suspect)
 
     # ---------------------------------------------------------------- scenes
-    def scene(self, node: Tree) -> Scene | None:
-        name, title, *items = node.children
+    def scene(self, node: SceneNode) -> Scene | None:
+        name, title = node.name, node.title
         self.broken = set()
         settings = dict(_SETTINGS)
-        by_kind: dict[str, list[Tree]] = {}
-        for item in items:
-            by_kind.setdefault(item.data, []).append(item)
-        points, bad_points = self.points(by_kind.get("point", []))
+        by_kind: dict[type, list] = {}
+        for item in node.items:
+            by_kind.setdefault(type(item), []).append(item)
+        points, bad_points = self.points(by_kind.get(PointNode, []))
         seen_settings: set[str] = set()
-        for item in by_kind.get("setting", []):
+        for item in by_kind.get(SettingNode, []):
             self.setting(item, settings, seen_settings)
-        body_nodes, layout_nodes = by_kind.get("body", []), by_kind.get("layout", [])
+        body_nodes, layout_nodes = by_kind.get(BodyNode, []), by_kind.get(LayoutNode, [])
         bodies: dict[str, Body] = {}
         for item in body_nodes:
             body = self.body(item)
             if body.id in bodies:  # the first stands, and what uses the name is not checked
-                self.error("duplicate-object", f"{body.id!r} is defined twice", item.children[1])
+                self.error("duplicate-object", f"{body.id!r} is defined twice", item.name)
                 self.broken.add(body.id)
                 continue
             bodies[body.id] = body
         # beyond a count limit the scene's layouts are not resolved (nor its tasks checked)
         too_many = False
-        for nodes, limit, what, at in ((body_nodes, MAX_BODIES, "bodies", 1),
-                                       (layout_nodes, MAX_LAYOUTS, "layouts", 0)):
+        for nodes, limit, what in ((body_nodes, MAX_BODIES, "bodies"),
+                                   (layout_nodes, MAX_LAYOUTS, "layouts")):
             if len(nodes) > limit:  # reported at the first one beyond the limit
                 self.error(f"too-many-{what}", f"scene {name!s} declares {len(nodes)} {what}; "
-                           f"at most {limit} are allowed", nodes[limit].children[at])
+                           f"at most {limit} are allowed", nodes[limit].name)
                 too_many = True
         if not too_many:  # (pairwise: not for a scene beyond the limit)
             self.check_colours(bodies, body_nodes)
-        jitter = self.jitters(by_kind.get("jitter", []), bodies)
+        jitter = self.jitters(by_kind.get(JitterNode, []), bodies)
         table = settings["table_height"]
         if too_many:
             layouts: dict[str, Layout] = {}
-            defined = {str(item.children[0]) for item in layout_nodes}
+            defined = {str(item.name) for item in layout_nodes}
         else:
             resolver = LayoutResolver(self, bodies, points, bad_points, table, jitter,
                                       self.broken)
             layouts = resolver.resolve(layout_nodes)
             defined = set(resolver.raw)  # a layout that failed to resolve is reported once, there
-        if not by_kind.get("task"):
+        if not by_kind.get(TaskNode):
             self.error("no-tasks", f"scene {name!s} has no training tasks (write at least one "
                        "task NAME on LAYOUT { \"instruction\" ... })", name)
         tasks = tuple(t for t in (self.task(item, str(name), bodies, defined)
-                                  for item in by_kind.get("task", [])) if t is not None)
+                                  for item in by_kind.get(TaskNode, [])) if t is not None)
         tests = tuple(t for t in (self.test(item, str(name), bodies, defined)
-                                  for item in by_kind.get("test", [])) if t is not None)
+                                  for item in by_kind.get(TestNode, [])) if t is not None)
         splits = {}
-        for item in by_kind.get("split", []):
+        for item in by_kind.get(SplitNode, []):
             rule = self.split(item, defined)
             if rule.level in splits:
-                self.error("duplicate-split", f"two split rules for {rule.level}", item.children[0])
+                self.error("duplicate-split", f"two split rules for {rule.level}", item.level)
             splits[rule.level] = rule
         self.suspect[str(name)] = {layout for layout in defined if layout not in layouts or any(
             body in self.broken for body in layouts[layout].placed)}
@@ -201,27 +216,28 @@ class _Loader(Checks):
                      layouts=layouts, tasks=tasks, splits=splits, tests=tests,
                      table_height=table)
 
-    def points(self, items: list[Tree]) -> tuple[dict[str, tuple[float, float]], set[str]]:
+    def points(self, items: list[PointNode]
+               ) -> tuple[dict[str, tuple[float, float]], set[str]]:
         """The named points, and those whose coordinates are bad (reported here, once: a layout
         that uses one fails without a second report)."""
         points: dict[str, tuple[float, float]] = {}
         bad: set[str] = set()
         for item in items:
-            point, coordinates = item.children
+            point = item.name
             if point in points or point in bad:
                 self.error("duplicate-point", f"point {point!s} is defined twice", point)
                 continue
-            position = self.coordinates(coordinates, f"point {point!s}")
+            position = self.coordinates(item.coordinates, f"point {point!s}")
             if position is None:
                 bad.add(str(point))
             else:
                 points[str(point)] = position
         return points, bad
 
-    def check_colours(self, bodies: dict[str, Body], items: list[Tree]) -> None:
+    def check_colours(self, bodies: dict[str, Body], items: list[BodyNode]) -> None:
         """Bodies that look the same (kind, size, rgb) must not be told apart by colour words
         a camera cannot see."""
-        tokens = {str(item.children[1]): item.children[1] for item in items}
+        tokens = {str(item.name): item.name for item in items}
         seen: list[Body] = []
         for body in bodies.values():
             if body.id in self.broken:
@@ -233,8 +249,8 @@ class _Loader(Checks):
                            tokens[body.id])
             seen.append(body)
 
-    def setting(self, item: Tree, settings: dict[str, float], seen: set[str]) -> None:
-        name, value = item.children
+    def setting(self, item: SettingNode, settings: dict[str, float], seen: set[str]) -> None:
+        name = item.name
         if name not in settings:
             self.error("unknown-setting", f"unknown setting {name!s} (known: "
                                           f"{', '.join(sorted(settings))})", name)
@@ -243,20 +259,19 @@ class _Loader(Checks):
             self.error("duplicate-setting", f"{name!s} is set twice", name)
             return
         seen.add(str(name))
-        if value.data != "number":
+        if not isinstance(item.value, Number):
             self.error("bad-value", f"{name!s} takes a number", name)
             return
         bounds, unit = _SETTING_RANGES[str(name)]
-        number = self.checked(value.children[0], str(name), bounds, unit)
+        number = self.checked(item.value.token, str(name), bounds, unit)
         if number is not None:
             settings[str(name)] = number
 
-    def body(self, item: Tree) -> Body:
+    def body(self, item: BodyNode) -> Body:
         """The body as written; a bad or missing attribute is an error, and the body is kept
         with a stand-in value and marked broken (the checks of what rests on a stand-in would
         only repeat the error)."""
-        kind_node, name, kind, *attribute_nodes = item.children
-        fixture = kind_node.children[0] == "fixture"
+        name, kind, fixture = item.name, item.kind, item.fixture
         known = kind in _SIZES
         if not known:
             self.error("unknown-kind", f"unknown kind {kind!s} (expected one of: "
@@ -265,14 +280,14 @@ class _Loader(Checks):
         sizes = _SIZES[str(kind)] if known else tuple(dict.fromkeys(
             a for names in _SIZES.values() for a in names))
         allowed = sizes + _COMMON + (() if fixture else _PHYSICS)
-        found = self.attributes(attribute_nodes, allowed)
+        found = self.attributes(item.attributes, allowed)
         missing = [a for a in allowed if a not in found and (known or a not in sizes)]
         if missing:
             self.error("missing-attribute", f"{name!s} needs {', '.join(missing)}", name)
-        color = found["color"].children[1] if "color" in found else None
-        if color is not None and (color.data != "name"
-                                  or color.children[0] not in lf.Color.__args__):
-            where = color.children[0] if color.data == "name" else found["color"].children[0]
+        color = found["color"].value if "color" in found else None
+        if color is not None and (not isinstance(color, Name)
+                                  or color.token not in lf.Color.__args__):
+            where = color.token if isinstance(color, Name) else found["color"].key
             self.error("bad-value", f"color must be one of {', '.join(lf.Color.__args__)}", where)
             color = None
         rgb = self.numbers(found["rgb"], 3, RGB_RANGE) if "rgb" in found else None
@@ -283,11 +298,12 @@ class _Loader(Checks):
         if color is None or half is None or rgb is None or None in physics.values():
             self.broken.add(str(name))
         return Body(id=str(name), kind=str(kind) if known else "cube", fixture=fixture,
-                    color=str(color.children[0]) if color is not None else "red",
+                    color=str(color.token) if color is not None else "red",
                     rgb=rgb or (0.5, 0.5, 0.5), half_extents=half or (0.02, 0.02, 0.02),
                     **{key: value for key, value in physics.items() if value is not None})
 
-    def size(self, kind: str, found: dict[str, Tree]) -> tuple[float, float, float] | None:
+    def size(self, kind: str, found: dict[str, Attribute]
+             ) -> tuple[float, float, float] | None:
         """Half extents from a kind's size attributes (None when one is missing or bad)."""
         if any(a not in found for a in _SIZES[kind]):
             return None
@@ -301,20 +317,20 @@ class _Loader(Checks):
                   if "half_height" in found else radius)
         return None if radius is None or height is None else (radius, radius, height)
 
-    def jitters(self, items: list[Tree], bodies: dict[str, Body]) -> dict[str, Jitter]:
+    def jitters(self, items: list[JitterNode], bodies: dict[str, Body]) -> dict[str, Jitter]:
         """Jitter by body ('*': the default). A bad range is reported once: it stands as no
         jitter, and the bodies it applies to are marked broken."""
         jitter: dict[str, Jitter] = {}
         bad: set[str] = set()
         for item in items:
-            target, attributes = item.children[0], item.children[1:]
+            target = item.target
             if target in jitter or target in bad:
                 self.error("duplicate-jitter", f"the jitter of {target!s} is given twice",
                            target)
                 continue
             if target != "*" and target not in bodies:
                 self.error("unknown-object", f"no object named {target!s}", target)
-            ranges = self.jitter(attributes)
+            ranges = self.jitter(item.attributes)
             if ranges is None:
                 bad.add(str(target))
             jitter[str(target)] = ranges or Jitter()
@@ -323,35 +339,32 @@ class _Loader(Checks):
                 self.broken.add(body)
         return jitter
 
-    def jitter(self, attributes: list[Tree]) -> Jitter | None:
+    def jitter(self, attributes: tuple[Attribute, ...]) -> Jitter | None:
         found = self.attributes(attributes, ("x", "y"))
         ranges = {}
         ok = True
         for axis, node in found.items():
-            value = node.children[1]
-            if value.data != "interval":
-                self.error("bad-value", f"{axis} takes an interval [low, high] (m)",
-                           node.children[0])
+            value = node.value
+            if not isinstance(value, Interval):
+                self.error("bad-value", f"{axis} takes an interval [low, high] (m)", node.key)
                 ok = False
                 continue
             low, high = (self.checked(t, f"jitter {axis}", (-MAX_JITTER, MAX_JITTER), " m")
-                         for t in value.children)
+                         for t in (value.low, value.high))
             if low is None or high is None:
                 ok = False
             elif low > high:
                 self.error("bad-value", f"{axis} takes an interval [low, high] with low <= high",
-                           node.children[0])
+                           node.key)
                 ok = False
             else:
                 ranges[axis] = (low, high)
         return Jitter(**ranges) if ok else None
 
     # ---------------------------------------------------------------- tasks and splits
-    def task(self, item: Tree, scene: str, bodies: dict[str, Body],
+    def task(self, item: TaskNode, scene: str, bodies: dict[str, Body],
              layouts: set[str]) -> Task | None:
-        label, layout, *rest = item.children
-        strings = [t for t in rest if isinstance(t, Token)]
-        expect = next((t for t in rest if isinstance(t, Tree)), None)
+        label, layout, strings, expect = item.label, item.layout, item.strings, item.expect
         ok = True
         if label in self.labels:
             self.error("duplicate-label", f"task {label!s} is also defined at "
@@ -378,9 +391,10 @@ class _Loader(Checks):
                     expect=expected, source=self.source(label),
                     paraphrase_sources=tuple(self.source(s) for s in strings))
 
-    def test(self, item: Tree, scene: str, bodies: dict[str, Body],
+    def test(self, item: TestNode, scene: str, bodies: dict[str, Body],
              layouts: set[str]) -> ListedTest | None:
-        level, name, layout, string, *rest = item.children
+        level, name, layout, string, expect = (item.level, item.name, item.layout, item.string,
+                                               item.expect)
         ok = True
         test_id = f"{scene}/{level}/{name}"
         if test_id in self.tests:
@@ -398,57 +412,49 @@ class _Loader(Checks):
                        Source(file=self.file, line=string.line,
                               column=string.column + error.column), error.length)
             ok = False
-        expected = self.expected(rest[0], bodies) if rest else None
-        if not ok or (rest and expected is None):
+        expected = self.expected(expect, bodies) if expect is not None else None
+        if not ok or (expect is not None and expected is None):
             return None
         return ListedTest(name=str(name), scene=scene, level=str(level), layout=str(layout),
                           instruction=string[1:-1], expect=expected, source=self.source(name))
 
-    def expected(self, node: Tree, bodies: dict[str, Body]) -> Expected | None:
-        branch = None
+    def expected(self, node: ExpectNode, bodies: dict[str, Body]) -> Expected | None:
         steps = []
         errors_before = len(self.errors)
-        for child in node.children:
-            if child.data == "branch":
-                branch = str(child.children[0])
-                continue
-            arm, source, *rest = child.children
-            if arm not in lf.Arm.__args__:
-                self.error("bad-value", "the arm is 'left' or 'right'", arm)
-            names = [source] + [t for t in rest if isinstance(t, Token) and t.type == "NAME"]
-            waypoints = [w for w in rest if isinstance(w, Tree) and w.data == "waypoint"]
-            names += [w.children[1] for w in waypoints]
+        for step in node.steps:
+            if step.arm not in lf.Arm.__args__:
+                self.error("bad-value", "the arm is 'left' or 'right'", step.arm)
+            names = [step.source, *([step.target] if step.target is not None else ()),
+                     *(w.name for w in step.waypoints)]
             for token in names:
                 if token not in bodies:
                     self.error("unknown-object", f"no object named {token!s}", token)
-            relation = next((str(t.children[0]) for t in rest
-                             if isinstance(t, Tree) and t.data == "relation"), None)
-            yaw_node = next((t for t in rest if isinstance(t, Tree) and t.data == "yaw"), None)
-            yaw = None if yaw_node is None else self.checked(yaw_node.children[0], "yaw",
-                                                             YAW_RANGE, " degrees")
-            target = str(rest[-1]) if child.data == "push" else (
-                str(names[1]) if child.data == "place" else None)
-            steps.append(dict(action=child.data, arm=str(arm), source=str(source),
-                              relation=relation, target=target,
-                              waypoints=tuple(sorted((str(w.children[0]), str(w.children[1]))
-                                                     for w in waypoints)), yaw_degrees=yaw))
+            yaw = None if step.yaw is None else self.checked(step.yaw, "yaw", YAW_RANGE,
+                                                             " degrees")
+            steps.append(dict(action=step.action, arm=str(step.arm), source=str(step.source),
+                              relation=None if step.relation is None else str(step.relation),
+                              target=None if step.target is None else str(step.target),
+                              waypoints=tuple(sorted((str(w.kind), str(w.name))
+                                                     for w in step.waypoints)),
+                              yaw_degrees=yaw))
         if len(self.errors) > errors_before:
             return None
-        return Expected(branch=branch, steps=tuple(Step(**s) for s in steps))
+        return Expected(branch=None if node.branch is None else str(node.branch),
+                        steps=tuple(Step(**s) for s in steps))
 
-    def split(self, item: Tree, layouts: set[str]) -> SplitRule:
-        level, *attribute_nodes = item.children
-        found = self.attributes(attribute_nodes, ("layouts", "wordings", "max", "rounds", "seed"))
-        values: dict = {"level": str(level)}
+    def split(self, item: SplitNode, layouts: set[str]) -> SplitRule:
+        found = self.attributes(item.attributes,
+                                ("layouts", "wordings", "max", "rounds", "seed"))
+        values: dict = {"level": str(item.level)}
         for key in ("layouts", "wordings"):
             if key in found:
-                node = found[key].children[1]
-                names = node.children if node.data == "values" else [node]
-                if any(n.data != "name" for n in names):
+                value = found[key].value
+                names = value.items if isinstance(value, Values) else (value,)
+                if not all(isinstance(n, Name) for n in names):
                     self.error("bad-value", f"{key} takes names: {key}=(a, b, ...)",
-                               found[key].children[0])
+                               found[key].key)
                     continue
-                tokens = [n.children[0] for n in names]
+                tokens = [n.token for n in names]
                 known = layouts if key == "layouts" else WORDINGS
                 for token in tokens:
                     if token not in known:
