@@ -27,7 +27,7 @@ from pathlib import Path
 
 from robofollow.build.episode import Episode
 from robofollow.compiler.spec import LEVELS, Spec
-from robofollow.compiler.spec_loader import spec_files
+from robofollow.compiler.spec_files import spec_files
 
 FORMAT = 1  # bump when the file layout or the records' meaning changes
 KEEP = 8  # cache files kept (the newest); older ones are removed when one is written

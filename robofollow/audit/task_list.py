@@ -37,7 +37,7 @@ from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
 from robofollow.compiler.parser import parse
 from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import LEVELS, Spec
-from robofollow.compiler.spec_loader import not_utf8, spec_error
+from robofollow.compiler.spec_files import Sources, not_utf8, spec_error
 from robofollow.compiler.splits import TestTask
 from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
 from robofollow.errors import InstructionError, RoboFollowError, SpecError
@@ -325,11 +325,12 @@ def task_list(splits) -> list[dict]:
 FATAL = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "infeasible")
 
 
-def listed_tests(spec: Spec, training: dict[str, Behaviour],
+def listed_tests(spec: Spec, training: dict[str, Behaviour], sources: Sources,
                  skip: dict[str, set[str]] | None = None
                  ) -> tuple[tuple[TestTask, ...], list[SpecError]]:
-    """The test tasks spec authors list in their levels, compiled, and a located error for
-    each that fails (tests on the layouts in `skip` are left unchecked). What would stop a
+    """The test tasks spec authors list in their levels, compiled, and a located error
+    (showing its line of `sources`) for each that fails (tests on the layouts in `skip` are
+    left unchecked). What would stop a
     generated candidate (no single referent, also at the jitter extremes, another behaviour
     than `expect` states, or one the expert cannot perform) is an error at the test; leakage,
     level and repertoire problems are left to the split audit, as for generated tasks."""
@@ -347,7 +348,8 @@ def listed_tests(spec: Spec, training: dict[str, Behaviour],
                                                   instruction=test.instruction, expect=expect))
             fatal = [(kind, message) for kind, message in examined.findings if kind in FATAL]
             if fatal:
-                errors += [spec_error(f"test-{kind}", message, test.source, len(test.name))
+                errors += [spec_error(f"test-{kind}", message, test.source, sources,
+                                      len(test.name))
                            for kind, message in fatal]
                 continue
             tasks.append(TestTask(id=test.id, scene=test.scene, level=test.level,

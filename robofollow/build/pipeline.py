@@ -14,7 +14,8 @@ from robofollow.audit.splits import audit, findings
 from robofollow.audit.task_list import listed_tests
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.spec import Spec
-from robofollow.compiler.spec_loader import load_partial, spec_files
+from robofollow.compiler.spec_files import spec_files
+from robofollow.compiler.spec_loader import load_partial
 from robofollow.compiler.splits import Splits, generate
 from robofollow.compiler.training import training_behaviours
 from robofollow.errors import SpecErrors
@@ -78,8 +79,8 @@ def _compile(specs: Path | list[Path]) -> Compiled:
     if loaded.spec is None:
         raise SpecErrors(loaded.errors)
     spec = loaded.spec
-    training, training_errors = training_behaviours(spec, loaded.suspect)
-    listed, test_errors = listed_tests(spec, training, loaded.suspect)
+    training, training_errors = training_behaviours(spec, loaded.sources, loaded.suspect)
+    listed, test_errors = listed_tests(spec, training, loaded.sources, loaded.suspect)
     errors = loaded.errors + training_errors + test_errors
     if errors:
         raise SpecErrors(errors)

@@ -13,7 +13,7 @@ from robofollow.compiler.feasibility import infeasible
 from robofollow.compiler.grounding import GroundingError, ground
 from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import Expected, Scene, Spec, Task
-from robofollow.compiler.spec_loader import spec_error
+from robofollow.compiler.spec_files import Sources, spec_error
 from robofollow.compiler.world import World
 from robofollow.errors import SpecError, SpecErrors
 
@@ -65,10 +65,11 @@ def task_behaviour(task: Task, scene: Scene) -> Behaviour:
     return first.model_copy(update={"steps": steps})
 
 
-def training_behaviours(spec: Spec, skip: dict[str, set[str]] | None = None
+def training_behaviours(spec: Spec, sources: Sources, skip: dict[str, set[str]] | None = None
                         ) -> tuple[dict[str, Behaviour], list[SpecError]]:
-    """Every training task's behaviour by label, and a located error for each task that fails;
-    tasks on the layouts in `skip` (scene -> layouts) are left unchecked."""
+    """Every training task's behaviour by label, and a located error (showing its line of
+    `sources`) for each task that fails; tasks on the layouts in `skip` (scene -> layouts) are
+    left unchecked."""
     behaviours: dict[str, Behaviour] = {}
     errors: list[SpecError] = []
     for scene in spec.scenes.values():
@@ -79,7 +80,7 @@ def training_behaviours(spec: Spec, skip: dict[str, set[str]] | None = None
                 behaviour = task_behaviour(task, scene)
             except TaskProblem as problem:
                 where = task.paraphrase_sources[problem.index]
-                errors.append(spec_error(problem.code, problem.message, where,
+                errors.append(spec_error(problem.code, problem.message, where, sources,
                                          len(task.paraphrases[problem.index]) + 2))
                 continue
             if task.expect is not None:
@@ -87,26 +88,29 @@ def training_behaviours(spec: Spec, skip: dict[str, set[str]] | None = None
                 if (expected.branch, expected.steps) != (behaviour.branch, behaviour.steps):
                     errors.append(spec_error(
                         "expect-mismatch", f"the instructions mean {describe(behaviour)}, but "
-                        f"expect says {describe(expected)}", task.source, len(task.label)))
+                        f"expect says {describe(expected)}", task.source, sources,
+                        len(task.label)))
                     continue
             world = World(scene, task.layout)
             routes = [p for step in behaviour.steps for p in degenerate_routes(step, world)]
             if routes:
                 errors.append(spec_error("degenerate-route", "; ".join(routes), task.source,
-                                         len(task.label)))
+                                         sources, len(task.label)))
                 continue
             problems = infeasible(behaviour, world)
             if problems:
                 errors.append(spec_error("infeasible", "the expert cannot do this: "
-                                         + "; ".join(problems), task.source, len(task.label)))
+                                         + "; ".join(problems), task.source, sources,
+                                         len(task.label)))
                 continue
             behaviours[task.label] = behaviour
     return behaviours, errors
 
 
 def check_training(spec: Spec) -> dict[str, Behaviour]:
-    """Every training task's behaviour by label; SpecErrors lists every task that fails."""
-    behaviours, errors = training_behaviours(spec)
+    """Every training task's behaviour by label; SpecErrors lists every task that fails (with
+    its line read from the spec file)."""
+    behaviours, errors = training_behaviours(spec, Sources())
     if errors:
         raise SpecErrors(errors)
     return behaviours

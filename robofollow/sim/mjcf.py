@@ -15,8 +15,8 @@ import jinja2
 import numpy as np
 
 from robofollow.compiler import workspace
+from robofollow.compiler.layouts import BOWL_FLOOR
 from robofollow.compiler.spec import Body, Scene
-from robofollow.compiler.spec_loader import BOWL_FLOOR
 from robofollow.sim import robot
 from robofollow.sim.assets import ARM_MESHES, mesh_dir
 

@@ -1,0 +1,310 @@
+"""The spec grammar (grammar/spec.lark): a file's text -> small syntax records (built by a
+Transformer applied inline while the LALR parser reduces), or the syntax error at the first
+place it fails.
+
+The records keep the tokens as written (each knows its line and column, for errors); what they
+mean is checked in spec_loader.py and layouts.py.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+
+from lark import Lark, Token, Transformer, UnexpectedCharacters, UnexpectedEOF, UnexpectedToken
+from lark import v_args
+
+from robofollow.compiler.spec import Source
+from robofollow.compiler.spec_files import Sources, spec_error, split_lines
+from robofollow.errors import SpecError
+from robofollow.resources import grammar_text
+
+# ---------------------------------------------------------------- values
+
+
+@dataclass(frozen=True, slots=True)
+class Number:
+    token: Token
+
+
+@dataclass(frozen=True, slots=True)
+class Name:
+    token: Token
+
+
+@dataclass(frozen=True, slots=True)
+class Values:
+    """(a, b, ...)"""
+
+    items: tuple[Value, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class Interval:
+    """[low, high]"""
+
+    low: Token
+    high: Token
+
+
+Value = Number | Name | Values | Interval
+
+
+@dataclass(frozen=True, slots=True)
+class Attribute:
+    key: Token
+    value: Value
+
+
+@dataclass(frozen=True, slots=True)
+class Coordinates:
+    x: Token
+    y: Token
+
+
+# ---------------------------------------------------------------- scene items
+
+
+@dataclass(frozen=True, slots=True)
+class PointNode:
+    name: Token
+    coordinates: Coordinates
+
+
+@dataclass(frozen=True, slots=True)
+class BodyNode:
+    fixture: bool
+    name: Token
+    kind: Token
+    attributes: tuple[Attribute, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class JitterNode:
+    target: Token  # a body, or '*'
+    attributes: tuple[Attribute, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class SettingNode:
+    name: Token
+    value: Value
+
+
+@dataclass(frozen=True, slots=True)
+class LayoutOp:
+    """One line of a layout: at, move (a position), on, in_, put_on, put_in, swap (another
+    body), remove."""
+
+    kind: str
+    body: Token
+    other: Token | None = None
+    position: Coordinates | Token | None = None  # coordinates, or a point's name
+
+
+@dataclass(frozen=True, slots=True)
+class LayoutNode:
+    name: Token
+    base: Token | None  # `from` this layout
+    ops: tuple[LayoutOp, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class Waypoint:
+    kind: Token  # via, avoid
+    name: Token
+
+
+@dataclass(frozen=True, slots=True)
+class StepNode:
+    action: str  # pick, place, push
+    arm: Token
+    source: Token
+    target: Token | None = None
+    relation: Token | None = None
+    waypoints: tuple[Waypoint, ...] = ()
+    yaw: Token | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class ExpectNode:
+    branch: Token | None
+    steps: tuple[StepNode, ...]
+
+
+@dataclass(frozen=True, slots=True)
+class TaskNode:
+    label: Token
+    layout: Token
+    strings: tuple[Token, ...]  # with their quotes
+    expect: ExpectNode | None
+
+
+@dataclass(frozen=True, slots=True)
+class TestNode:
+    level: Token
+    name: Token
+    layout: Token
+    string: Token  # with its quotes
+    expect: ExpectNode | None
+
+
+@dataclass(frozen=True, slots=True)
+class SplitNode:
+    level: Token
+    attributes: tuple[Attribute, ...]
+
+
+SceneItem = PointNode | BodyNode | JitterNode | SettingNode | LayoutNode | TaskNode | TestNode \
+    | SplitNode
+
+
+@dataclass(frozen=True, slots=True)
+class SceneNode:
+    name: Token
+    title: Token  # with its quotes
+    items: tuple[SceneItem, ...]
+
+
+# ---------------------------------------------------------------- the transformer
+
+
+@v_args(inline=True)
+class _ToNodes(Transformer):
+    def start(self, *scenes):
+        return list(scenes)
+
+    def scene(self, name, title, *items):
+        return SceneNode(name, title, items)
+
+    def point(self, name, coordinates):
+        return PointNode(name, coordinates)
+
+    def body(self, kind_word, name, kind, *attributes):
+        return BodyNode(kind_word == "fixture", name, kind, attributes)
+
+    def body_kind(self, word):  # object, fixture
+        return word
+
+    def jitter(self, target, *attributes):
+        return JitterNode(target, attributes)
+
+    def setting(self, name, value):
+        return SettingNode(name, value)
+
+    def attribute(self, key, value):
+        return Attribute(key, value)
+
+    def number(self, token):
+        return Number(token)
+
+    def name(self, token):
+        return Name(token)
+
+    def values(self, *items):
+        return Values(items)
+
+    def interval(self, low, high):
+        return Interval(low, high)
+
+    def coordinates(self, x, y):
+        return Coordinates(x, y)
+
+    def layout(self, name, base, *ops):
+        return LayoutNode(name, base, ops)
+
+    def at(self, body, position):
+        return LayoutOp("at", body, position=position)
+
+    def move(self, body, position):
+        return LayoutOp("move", body, position=position)
+
+    def on(self, body, other):
+        return LayoutOp("on", body, other)
+
+    def in_(self, body, other):
+        return LayoutOp("in_", body, other)
+
+    def put_on(self, body, other):
+        return LayoutOp("put_on", body, other)
+
+    def put_in(self, body, other):
+        return LayoutOp("put_in", body, other)
+
+    def swap(self, body, other):
+        return LayoutOp("swap", body, other)
+
+    def remove(self, body):
+        return LayoutOp("remove", body)
+
+    def task(self, label, layout, *strings_and_expect):
+        *strings, expect = strings_and_expect
+        return TaskNode(label, layout, tuple(strings), expect)
+
+    def test(self, level, name, layout, string, expect):
+        return TestNode(level, name, layout, string, expect)
+
+    def expect(self, branch, *steps):
+        return ExpectNode(branch, steps)
+
+    def branch(self, word):  # then, otherwise
+        return word
+
+    def pick(self, arm, source):
+        return StepNode("pick", arm, source)
+
+    def place(self, arm, source, relation, target, *waypoints_and_yaw):
+        *waypoints, yaw = waypoints_and_yaw
+        return StepNode("place", arm, source, target, relation, tuple(waypoints), yaw)
+
+    def push(self, arm, source, target):
+        return StepNode("push", arm, source, target)
+
+    def relation(self, word):
+        return word
+
+    def waypoint(self, kind, name):
+        return Waypoint(kind, name)
+
+    def yaw(self, number):
+        return number
+
+    def split(self, level, *attributes):
+        return SplitNode(level, attributes)
+
+
+# ---------------------------------------------------------------- parsing
+
+
+@cache
+def _parser() -> Lark:
+    return Lark(grammar_text("spec.lark"), parser="lalr", strict=True, transformer=_ToNodes())
+
+
+def parse_spec(text: str, file: str, sources: Sources) -> list[SceneNode] | SpecError:
+    """The scenes of a spec file's text, or its syntax error."""
+    try:
+        return _parser().parse(text)
+    except (UnexpectedEOF, UnexpectedToken) as error:
+        if isinstance(error, UnexpectedEOF) or error.token.type == "$END":
+            lines = split_lines(text.rstrip())
+            return SpecError("syntax", "the file ends too early" + _expected(error.expected),
+                             file=file, line=len(lines), column=len(lines[-1]) + 1,
+                             source_line=lines[-1])
+        token = error.token
+        return spec_error("syntax", f"unexpected {token!s:.30}" + _expected(error.expected),
+                          Source(file=file, line=token.line, column=token.column), sources,
+                          len(token))
+    except UnexpectedCharacters as error:
+        return spec_error("syntax", f"unexpected character {text[error.pos_in_stream]!r}"
+                          + _expected(error.allowed),
+                          Source(file=file, line=error.line, column=error.column), sources)
+
+
+def _expected(terminals) -> str:
+    """Expected terminals as a reader knows them: '}' rather than RBRACE."""
+    names = []
+    for name in sorted(terminals):
+        pattern = _parser().get_terminal(name).pattern
+        names.append(repr(pattern.value) if pattern.type == "str" else name.lower())
+    return f" (expected: {', '.join(sorted(names)[:12])})" if names else ""
