@@ -480,8 +480,8 @@ def cmd_serve(args) -> int:
 
     from robofollow.build import compile_specs
     from robofollow.eval.serving import ServerLimits
-    from robofollow.eval.tcp import TcpPolicyServer
-    from robofollow.eval.websocket import PolicyServer
+    from robofollow.eval.tcp_server import TcpPolicyServer
+    from robofollow.eval.websocket_server import PolicyServer
 
     server_class, scheme = ((TcpPolicyServer, "tcp") if args.protocol == "tcp"
                             else (PolicyServer, "ws"))

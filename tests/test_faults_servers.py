@@ -40,8 +40,10 @@ from robofollow.eval.policy import (
 from robofollow.eval.report import write_report
 from robofollow.eval.runner import EvalOptions
 from robofollow.eval.serving import IDLE_TIMEOUT_S, MAX_CLIENTS, ServerLimits
-from robofollow.eval.tcp import TcpPolicy, TcpPolicyServer
-from robofollow.eval.websocket import PolicyServer, WebsocketPolicy
+from robofollow.eval.tcp_client import TcpPolicy
+from robofollow.eval.tcp_server import TcpPolicyServer
+from robofollow.eval.websocket_client import WebsocketPolicy
+from robofollow.eval.websocket_server import PolicyServer
 from robofollow.eval.wire import MAX_MESSAGE_BYTES, packb, unpackb
 from robofollow.resources import builtin_specs
 from robofollow.sim import robot

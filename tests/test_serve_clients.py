@@ -16,8 +16,10 @@ import numpy as np
 import pytest
 from websockets.sync.client import connect
 
-from robofollow.eval.tcp import TcpPolicy, TcpPolicyServer
-from robofollow.eval.websocket import PolicyServer, WebsocketPolicy
+from robofollow.eval.tcp_client import TcpPolicy
+from robofollow.eval.tcp_server import TcpPolicyServer
+from robofollow.eval.websocket_client import WebsocketPolicy
+from robofollow.eval.websocket_server import PolicyServer
 from robofollow.eval.serving import ServerLimits
 from robofollow.eval.wire import packb, unpackb
 from robofollow.sim import robot

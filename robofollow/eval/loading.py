@@ -11,6 +11,8 @@ from urllib.parse import parse_qsl, urlsplit
 from robofollow.errors import RoboFollowError
 from robofollow.eval.policy import OBSERVATION_PARTS, Policy
 from robofollow.eval.reference import REFERENCE_POLICIES
+from robofollow.eval.tcp_client import TcpPolicy
+from robofollow.eval.websocket_client import WebsocketPolicy
 
 
 class PolicyLoadError(RoboFollowError):
@@ -84,11 +86,7 @@ def _remote(spec: str) -> Policy:
                               "retries at least 0, privileged 0 or 1")
     settings["privileged"] = bool(settings.get("privileged", 0))
     if address.scheme == "tcp":
-        from robofollow.eval.tcp import TcpPolicy
-
         return TcpPolicy(address.hostname, port, **settings)
-    from robofollow.eval.websocket import WebsocketPolicy  # (it serves loaded policies)
-
     return WebsocketPolicy(f"{address.scheme}://{address.netloc}{address.path}", **settings)
 
 
