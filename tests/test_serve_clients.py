@@ -24,8 +24,8 @@ from robofollow.eval.serving import ServerLimits
 from robofollow.eval.wire import packb, unpackb
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES, IMAGE_HEIGHT, IMAGE_WIDTH
+from tests.server_helpers import WAIT, _array, _client, _frame, _read, served
 from tests.sim_helpers import benchmark
-from tests.test_faults_servers import WAIT, _array, _client, _frame, _read, served
 
 HOME = robot.home_state().astype(np.float32)
 UPSTREAM_CAMERAS = ("head_camera", "left_camera", "right_camera")
