@@ -404,7 +404,8 @@ def cmd_dataset_check(args) -> int:
 def cmd_eval(args) -> int:
     from robofollow.build.pipeline import compile_specs
     from robofollow.eval.deadline import DEFAULT_POLICY_TIMEOUT
-    from robofollow.eval.loading import is_server, with_privileged
+    from robofollow.eval.loading import with_privileged
+    from robofollow.eval.policy_kind import is_server
     from robofollow.eval.report import write_report
     from robofollow.eval.runner import EvalOptions, evaluate, failures_text
     from robofollow.eval.tables import table_text
@@ -485,8 +486,8 @@ def cmd_serve(args) -> int:
 
     from robofollow.build.pipeline import compile_specs
     from robofollow.eval.serving import ServerLimits
-    from robofollow.eval.tcp import TcpPolicyServer
-    from robofollow.eval.websocket import PolicyServer
+    from robofollow.eval.tcp_server import TcpPolicyServer
+    from robofollow.eval.websocket_server import PolicyServer
 
     server_class, scheme = ((TcpPolicyServer, "tcp") if args.protocol == "tcp"
                             else (PolicyServer, "ws"))

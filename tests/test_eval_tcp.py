@@ -17,7 +17,8 @@ from robofollow.eval.episode import run_episode
 from robofollow.eval.loading import PolicyLoadError, load_policy
 from robofollow.eval.policy import PolicyConnectionError
 from robofollow.eval.reference import ExpertPolicy
-from robofollow.eval.tcp import TcpPolicy, TcpPolicyServer
+from robofollow.eval.tcp_client import TcpPolicy
+from robofollow.eval.tcp_server import TcpPolicyServer
 from robofollow.sim import robot
 from tests.sim_helpers import benchmark, episode, serve_process
 

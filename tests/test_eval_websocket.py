@@ -14,7 +14,8 @@ from websockets.sync.server import serve
 from robofollow.eval.episode import run_episode
 from robofollow.eval.policy import PolicyConnectionError
 from robofollow.eval.reference import ExpertPolicy
-from robofollow.eval.websocket import PolicyServer, WebsocketPolicy
+from robofollow.eval.websocket_client import WebsocketPolicy
+from robofollow.eval.websocket_server import PolicyServer
 from robofollow.eval.wire import packb, unpackb
 from robofollow.sim import robot
 from tests.sim_helpers import benchmark, episode

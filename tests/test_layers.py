@@ -31,6 +31,7 @@ def test_the_code_keeps_every_contract():
     ("oracle/metrics.py", "import mujoco", "no MuJoCo"),
     ("audit/entropy.py", "import robofollow.oracle.score", "robofollow.audit"),
     ("eval/run_folder.py", "import robofollow.eval.runner", "No import cycles"),
+    ("eval/tcp_client.py", "import robofollow.eval.tcp_server", "never import the servers"),
 ])
 def test_a_bad_import_breaks_a_contract(tmp_path, module, bad_import, broken):
     shutil.copytree(ROOT / "robofollow", tmp_path / "robofollow",

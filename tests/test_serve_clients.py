@@ -16,14 +16,16 @@ import numpy as np
 import pytest
 from websockets.sync.client import connect
 
-from robofollow.eval.tcp import TcpPolicy, TcpPolicyServer
-from robofollow.eval.websocket import PolicyServer, WebsocketPolicy
+from robofollow.eval.tcp_client import TcpPolicy
+from robofollow.eval.tcp_server import TcpPolicyServer
+from robofollow.eval.websocket_client import WebsocketPolicy
+from robofollow.eval.websocket_server import PolicyServer
 from robofollow.eval.serving import ServerLimits
 from robofollow.eval.wire import packb, unpackb
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES, IMAGE_HEIGHT, IMAGE_WIDTH
+from tests.server_helpers import WAIT, _array, _client, _frame, _read, served
 from tests.sim_helpers import benchmark
-from tests.test_faults_servers import WAIT, _array, _client, _frame, _read, served
 
 HOME = robot.home_state().astype(np.float32)
 UPSTREAM_CAMERAS = ("head_camera", "left_camera", "right_camera")

@@ -10,27 +10,26 @@ from urllib.parse import parse_qsl, urlsplit
 
 from robofollow.errors import RoboFollowError
 from robofollow.eval.policy import OBSERVATION_PARTS, Policy
+from robofollow.eval.policy_kind import SERVER_KINDS, PolicyKind, is_server, policy_kind
 from robofollow.eval.reference import REFERENCE_POLICIES
+from robofollow.eval.tcp_client import TcpPolicy
+from robofollow.eval.websocket_client import WebsocketPolicy
 
 
 class PolicyLoadError(RoboFollowError):
     """A --policy that names nothing usable."""
 
 
-def is_server(spec: str) -> bool:
-    """Whether a --policy names a policy server rather than an in-process policy."""
-    return spec.startswith(("ws://", "wss://", "tcp://"))
-
-
 def load_policy(spec: str) -> Policy:
-    if spec in REFERENCE_POLICIES:
+    kind = policy_kind(spec)
+    if kind == "reference":
         return REFERENCE_POLICIES[spec]()
-    if is_server(spec):
-        return _remote(spec)
-    from robofollow.learn import checkpoint, policy as baseline
+    if kind in SERVER_KINDS:
+        return _remote(spec, kind)
+    if kind in ("baseline", "checkpoint"):
+        from robofollow.learn.policy import load_baseline  # (the learn package is heavy)
 
-    if spec.startswith(baseline.PREFIX) or checkpoint.is_checkpoint(spec):
-        return baseline.load_baseline(spec)
+        return load_baseline(spec)
     module_name, _, factory_name = spec.partition(":")
     if not module_name or not factory_name:
         raise PolicyLoadError(f"--policy {spec!r}: expected one of "
@@ -57,7 +56,7 @@ def load_policy(spec: str) -> Policy:
 SERVER_SETTINGS = {"timeout": float, "retries": int, "max_message": int, "privileged": int}
 
 
-def _remote(spec: str) -> Policy:
+def _remote(spec: str, kind: PolicyKind) -> Policy:
     """A policy server: `ws://` or `tcp://` HOST:PORT, optionally
     `?timeout=S&retries=N&max_message=BYTES&privileged=1`: seconds per call before a retry
     (default 60); retries after a time-out or a lost connection (default 3); the largest
@@ -83,12 +82,8 @@ def _remote(spec: str) -> Policy:
         raise PolicyLoadError(f"--policy {spec!r}: timeout and max_message must be positive, "
                               "retries at least 0, privileged 0 or 1")
     settings["privileged"] = bool(settings.get("privileged", 0))
-    if address.scheme == "tcp":
-        from robofollow.eval.tcp import TcpPolicy
-
+    if kind == "tcp":
         return TcpPolicy(address.hostname, port, **settings)
-    from robofollow.eval.websocket import WebsocketPolicy  # (it serves loaded policies)
-
     return WebsocketPolicy(f"{address.scheme}://{address.netloc}{address.path}", **settings)
 
 

@@ -50,6 +50,12 @@ class Privileged:
     seed: int  # the episode's seed, for policies that draw at random
 
 
+def privileged_message(privileged: Privileged) -> dict:
+    """The start a served reference policy rebuilds: {scene, layout, seed}."""
+    return {"scene": privileged.scene.id, "layout": privileged.sim.layout,
+            "seed": privileged.seed}
+
+
 class PolicyConnectionError(RoboFollowError):
     """A policy server could not be reached or did not answer, after the retries."""
 

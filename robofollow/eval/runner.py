@@ -38,8 +38,8 @@ from robofollow.errors import RoboFollowError
 from robofollow.eval.chance import references
 from robofollow.eval.episode import EpisodeRun, run_episode
 from robofollow.eval.instructions import given_instruction
-from robofollow.eval.loading import is_server, load_policy
-from robofollow.eval.reference import REFERENCE_POLICIES
+from robofollow.eval.loading import load_policy
+from robofollow.eval.policy_kind import policy_kind
 from robofollow.eval.run_folder import (
     RESULTS,
     RESUMABLE,
@@ -217,8 +217,7 @@ class _LostEpisodes:
 def _isolated(spec: str) -> bool:
     """Whether a policy is someone else's code (module:factory), run in a worker process
     even with one worker; reference policies, servers and checkpoints run in this one."""
-    return not (spec in REFERENCE_POLICIES or is_server(spec) or spec.startswith("baseline:")
-                or Path(spec).is_dir())
+    return policy_kind(spec) == "factory"
 
 
 # -- RUN/episodes.jsonl ------------------------------------------------------------------------

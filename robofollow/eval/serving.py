@@ -258,9 +258,3 @@ def error_reply(error: Exception, where: str) -> str:
     else:
         log.error("%s: the policy failed", where, exc_info=error)
     return server_text(f"{type(error).__name__}: {error}")
-
-
-def privileged_message(privileged: Privileged) -> dict:
-    """The start a served reference policy rebuilds: {scene, layout, seed}."""
-    return {"scene": privileged.scene.id, "layout": privileged.sim.layout,
-            "seed": privileged.seed}

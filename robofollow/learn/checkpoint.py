@@ -26,6 +26,7 @@ from robofollow.errors import RoboFollowError
 from robofollow.learn.model import Architecture
 
 FORMAT = "robofollow-baseline/1"
+PREFIX = "baseline:"  # --policy baseline:NAME names a shipped checkpoint
 
 
 class CheckpointError(RoboFollowError):

@@ -16,7 +16,6 @@ from robofollow.learn.model import forward
 from robofollow.learn.tokens import encode
 
 SHIPPED = Path(__file__).resolve().parent.parent / "baselines"
-PREFIX = "baseline:"
 
 
 class BaselinePolicy:
@@ -62,8 +61,8 @@ def shipped_names() -> list[str]:
 
 def load_baseline(spec: str) -> BaselinePolicy:
     """A policy from `baseline:NAME` or a checkpoint folder."""
-    if spec.startswith(PREFIX):
-        name = spec[len(PREFIX):]
+    if spec.startswith(checkpoint.PREFIX):
+        name = spec[len(checkpoint.PREFIX):]
         if name not in shipped_names():
             raise checkpoint.CheckpointError(
                 f"--policy {spec!r}: no shipped baseline {name!r}; shipped: "
