@@ -27,7 +27,8 @@ from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 from websockets.sync.server import serve
 
-from robofollow.cli import build_parser, main
+from robofollow.cli import main
+from robofollow.cli import parser as build_parser
 from robofollow.eval.episode import run_episode
 from robofollow.eval.loading import PolicyLoadError, load_policy
 from robofollow.eval.policy import (
