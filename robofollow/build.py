@@ -29,7 +29,7 @@ from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.goals import goal_graph, graph_to_dict
 from robofollow.compiler.plans import plan
-from robofollow.compiler.spec import LEVELS, Spec
+from robofollow.compiler.spec import LEVELS, ROUNDS, Spec
 from robofollow.compiler.spec_loader import load_partial, spec_files
 from robofollow.compiler.splits import Splits, TestTask, episode_seed, generate
 from robofollow.compiler.training import training_behaviours
@@ -100,7 +100,7 @@ def _line(record: dict) -> str:
 
 def episodes(compiled: Compiled, task: TestTask) -> list[dict]:
     rule = compiled.spec.scenes[task.scene].splits.get(task.level)
-    rounds, base = (rule.rounds, rule.seed) if rule else (10, 42)
+    rounds, base = (rule.rounds, rule.seed) if rule else (ROUNDS, 42)
     form, behaviour = json.loads(lf.to_json(task.form)), task.behaviour.model_dump(mode="json")
     records = []
     for round_index in range(1, rounds + 1):

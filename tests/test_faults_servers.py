@@ -30,6 +30,7 @@ from websockets.sync.server import serve
 from robofollow.cli import main
 from robofollow.cli import parser as build_parser
 from robofollow.eval.episode import run_episode
+from robofollow.eval.limits import IDLE_TIMEOUT_S, MAX_CLIENTS, MAX_MESSAGE_BYTES
 from robofollow.eval.loading import PolicyLoadError, load_policy
 from robofollow.eval.policy import (
     BadActionError,
@@ -40,10 +41,10 @@ from robofollow.eval.policy import (
 )
 from robofollow.eval.report import write_report
 from robofollow.eval.runner import EvalOptions
-from robofollow.eval.serving import IDLE_TIMEOUT_S, MAX_CLIENTS, ServerLimits
+from robofollow.eval.serving import ServerLimits
 from robofollow.eval.tcp import TcpPolicy, TcpPolicyServer
 from robofollow.eval.websocket import PolicyServer, WebsocketPolicy
-from robofollow.eval.wire import MAX_MESSAGE_BYTES, packb, unpackb
+from robofollow.eval.wire import packb, unpackb
 from robofollow.resources import builtin_specs
 from robofollow.sim import robot
 from tests.sim_helpers import benchmark, episode, serve_process

@@ -9,8 +9,10 @@ import os
 from pathlib import Path
 
 from robofollow.cli.common import interrupted, positive, seconds, specs_of, specs_option
-from robofollow.compiler.spec import LEVELS
+from robofollow.compiler.spec import LEVELS, ROUNDS
 from robofollow.errors import RoboFollowError
+from robofollow.eval.deadline import DEFAULT_POLICY_TIMEOUT
+from robofollow.eval.limits import CALL_TIMEOUT_S, CHUNK_LIMIT, MAX_MESSAGE_BYTES
 from robofollow.workers import EXECUTORS
 
 
@@ -18,10 +20,10 @@ def add_eval(commands) -> None:
     p = commands.add_parser(
         "eval", help="evaluate a policy over L0-L3: the paper's Table 1",
         description="Run a policy on the compiled episodes (fixed action budget, chunks of at "
-                    "most 50 actions, the tasks' seeds), score every episode with the oracle, "
-                    "append the results to RUN/episodes.jsonl and write RUN/summary.json; "
-                    "prints IS / ES / CR per scene and level. Interrupted runs continue with "
-                    "--resume.",
+                    f"most {CHUNK_LIMIT} actions, the tasks' seeds), score every episode with "
+                    "the oracle, append the results to RUN/episodes.jsonl and write "
+                    "RUN/summary.json; prints IS / ES / CR per scene and level. Interrupted "
+                    "runs continue with --resume.",
         epilog="examples:\n  robofollow eval --policy expert --out runs/expert\n  robofollow "
                "eval --policy expert --out runs/quick --sample 2 --rounds 1\n  robofollow "
                "eval --policy blind --out runs/blind --levels L0,L1 --rounds 2\n  robofollow "
@@ -47,8 +49,8 @@ def add_eval(commands) -> None:
     p.add_argument("--sample", type=positive, metavar="N",
                    help="only N tasks of each scene and level, evenly spread over its task "
                         "list (a quick look; default: every task)")
-    p.add_argument("--rounds", type=positive, default=10, metavar="N",
-                   help="rounds per task, each with its own seed (default: 10)")
+    p.add_argument("--rounds", type=positive, default=ROUNDS, metavar="N",
+                   help=f"rounds per task, each with its own seed (default: {ROUNDS})")
     p.add_argument("--workers", type=positive, default=os.cpu_count() or 1, metavar="N",
                    help="workers, one simulation each (default: the number of CPUs)")
     p.add_argument("--executor", choices=EXECUTORS, default="process",
@@ -63,13 +65,15 @@ def add_eval(commands) -> None:
     p.add_argument("--policy-timeout", type=seconds, metavar="S",
                    help="end an episode whose in-process policy takes longer than S seconds "
                         "over a reset() or act() call, recording it as a policy failure "
-                        "(default: 60; servers take ?timeout=S&retries=N, default 60)")
+                        f"(default: {DEFAULT_POLICY_TIMEOUT:g}; servers take "
+                        f"?timeout=S&retries=N, default {CALL_TIMEOUT_S:g})")
     p.add_argument("--allow-privileged", action="store_true",
                    help="let a policy server (ws:// or tcp://) that asks for them have "
                         "privileged observations: each episode's scene, layout and seed, from "
                         "which it can rebuild the simulation's ground truth. Without it such a "
                         "server is refused. Recorded in the run as ?privileged=1 on --policy; "
-                        "servers also take ?max_message=BYTES (largest reply, default 16 MiB)")
+                        "servers also take ?max_message=BYTES (largest reply, default "
+                        f"{MAX_MESSAGE_BYTES // 2 ** 20} MiB)")
     p.add_argument("--resume", action="store_true", help="continue an interrupted run")
     p.add_argument("--drop-corrupt", action="store_true",
                    help="with --resume: move corrupt lines of RUN/episodes.jsonl (which stop a "
@@ -81,7 +85,6 @@ def add_eval(commands) -> None:
 
 def cmd_eval(args) -> int:
     from robofollow.build import compile_specs
-    from robofollow.eval.deadline import DEFAULT_POLICY_TIMEOUT
     from robofollow.eval.loading import is_server, with_privileged
     from robofollow.eval.report import write_report
     from robofollow.eval.runner import EvalOptions, evaluate, failures_text

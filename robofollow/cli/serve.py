@@ -6,6 +6,7 @@ import sys
 
 from robofollow.cli.common import positive, seconds, specs_of, specs_option
 from robofollow.errors import RoboFollowError
+from robofollow.eval.limits import DEFAULT_HOST, IDLE_TIMEOUT_S, MAX_CLIENTS, MAX_MESSAGE_BYTES
 
 
 def add_serve(commands) -> None:
@@ -21,19 +22,21 @@ def add_serve(commands) -> None:
                    help="wire protocol (default: websocket)")
     p.add_argument("--policy", required=True, help="expert, blind, noop, random, "
                    "baseline:NAME, a checkpoint folder, or module:factory")
-    p.add_argument("--host", default="127.0.0.1",
-                   help="address to listen on (default: 127.0.0.1, this machine only; "
+    p.add_argument("--host", default=DEFAULT_HOST,
+                   help=f"address to listen on (default: {DEFAULT_HOST}, this machine only; "
                         "--host 0.0.0.0 exposes the server to every network this machine is "
                         "on, without authentication: only on a network you trust)")
     p.add_argument("--port", type=positive, default=8000, help="port (default: 8000)")
     p.add_argument("--max-message", type=positive, metavar="BYTES",
                    help="refuse requests larger than this, closing the connection (default: "
-                        "16777216, 16 MiB; three 320x240 images take about 1 MiB)")
+                        f"{MAX_MESSAGE_BYTES}, {MAX_MESSAGE_BYTES // 2 ** 20} MiB; three 320x240 "
+                        "images take about 1 MiB)")
     p.add_argument("--idle-timeout", type=seconds, metavar="S",
-                   help="close a connection that sends nothing for S seconds (default: 300)")
+                   help="close a connection that sends nothing for S seconds "
+                        f"(default: {IDLE_TIMEOUT_S:g})")
     p.add_argument("--max-clients", type=positive, metavar="N",
                    help="connections served at once, each with its own instance of the "
-                        "policy; more are refused (default: 8)")
+                        f"policy; more are refused (default: {MAX_CLIENTS})")
     specs_option(p)
     p.set_defaults(handler=cmd_serve)
 

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from robofollow.cli.common import positive
 from robofollow.errors import RoboFollowError
+from robofollow.learn.options import KINDS, TrainOptions
 
 
 def add_train(commands) -> None:
@@ -25,30 +26,34 @@ def add_train(commands) -> None:
                "  robofollow eval --policy runs/scene2-text --out runs/eval-text "
                "--scenes scene2", formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("dataset", metavar="DATASET", help="dataset folder")
-    p.add_argument("--policy", choices=("text", "blind", "form"),
-                   help="what the network reads of the instruction (default: text)")
+    p.add_argument("--policy", choices=KINDS,
+                   help=f"what the network reads of the instruction (default: {TrainOptions.kind})")
     p.add_argument("--out", required=True, metavar="CKPT", help="checkpoint folder (new, "
                                                                "or the one to --resume)")
-    p.add_argument("--steps", type=positive, help="training steps (default: 10000)")
-    p.add_argument("--batch", type=positive, help="samples per step (default: 64)")
+    p.add_argument("--steps", type=positive, help=f"training steps (default: {TrainOptions.steps})")
+    p.add_argument("--batch", type=positive,
+                   help=f"samples per step (default: {TrainOptions.batch})")
     p.add_argument("--learning-rate", type=float, metavar="LR",
-                   help="Adam's peak learning rate (default: 0.001)")
+                   help=f"Adam's peak learning rate (default: {TrainOptions.learning_rate})")
     p.add_argument("--seed", type=int, help="initialisation, order, augmentation and "
-                                            "held-out split (default: 0)")
+                                            f"held-out split (default: {TrainOptions.seed})")
     p.add_argument("--cameras", type=_cameras, metavar="LIST",
-                   help="comma-separated cameras (default: cam_high)")
+                   help=f"comma-separated cameras (default: {','.join(TrainOptions.cameras)})")
+    factor = TrainOptions.factor
     p.add_argument("--factor", type=positive, help="shrink camera images by this factor "
-                                                    "(default: 4: 320x240 -> 80x60)")
+                   f"(default: {factor}: 320x240 -> {320 // factor}x{240 // factor})")
     p.add_argument("--shift", type=int, metavar="PX",
-                   help="random-shift augmentation in pixels (default: 4)")
-    p.add_argument("--chunk", type=positive, help="actions predicted per query (default: 50)")
+                   help=f"random-shift augmentation in pixels (default: {TrainOptions.shift})")
+    p.add_argument("--chunk", type=positive,
+                   help=f"actions predicted per query (default: {TrainOptions.chunk})")
     p.add_argument("--execute", type=positive,
-                   help="actions of each chunk executed before the next query (default: 25)")
+                   help="actions of each chunk executed before the next query "
+                        f"(default: {TrainOptions.execute})")
     p.add_argument("--val-fraction", type=float, metavar="F",
                    help="held-out demonstrations per task for the validation loss "
-                        "(default: 0.05)")
+                        f"(default: {TrainOptions.val_fraction})")
     p.add_argument("--checkpoint-every", type=positive, metavar="N",
-                   help="steps between checkpoints (default: 1000)")
+                   help=f"steps between checkpoints (default: {TrainOptions.checkpoint_every})")
     p.add_argument("--episodes-per-task", type=positive, metavar="N",
                    help="train on the first N demonstrations of each task (default: all)")
     p.add_argument("--variants-per-task", type=positive, metavar="N",
@@ -80,7 +85,6 @@ def cmd_train(args) -> int:
     from dataclasses import fields
 
     from robofollow.learn.train import (
-        TrainOptions,
         default_cache,
         resumed_options,
         train,

@@ -15,6 +15,7 @@ import numpy as np
 
 from robofollow.build import Compiled
 from robofollow.eval.deadline import PolicyTimeout, check_deadline, deadline
+from robofollow.eval.limits import ACTION_BUDGET, CHUNK_LIMIT
 from robofollow.eval.policy import BadActionError, Policy, Privileged, validate_actions
 from robofollow.oracle.results import EpisodeScore
 from robofollow.scoring import score_recording
@@ -22,9 +23,6 @@ from robofollow.sim import robot
 from robofollow.sim.recorder import Recorder
 from robofollow.sim.stage import Stage
 from robofollow.trajectory import Trajectory
-
-ACTION_BUDGET = 500  # control steps per episode (upstream: 10 chunks x 50 actions)
-CHUNK_LIMIT = 50  # actions executed from each chunk before the policy is asked again
 
 
 @dataclass

@@ -11,7 +11,7 @@ its reply is the [T, 14] absolute joint targets.
 `robofollow serve --protocol tcp` puts a Python policy behind this protocol, each connection
 in its own thread with its own policy instance. Its error replies carry the error's message;
 "traceback" says only that the traceback is in the server's log. A message over the receiving
-end's limit (`robofollow.eval.wire.MAX_MESSAGE_BYTES` unless configured) is refused unread: the
+end's limit (`robofollow.eval.limits.MAX_MESSAGE_BYTES` unless configured) is refused unread: the
 server answers with an error and closes the connection, the client fails the call.
 
 The server also answers an HTTP `GET /healthz` on its port with 200, checks each predict
@@ -39,6 +39,7 @@ import time
 import numpy as np
 
 from robofollow.build import Compiled
+from robofollow.eval.limits import CALL_TIMEOUT_S, DEFAULT_HOST, MAX_MESSAGE_BYTES
 from robofollow.eval.policy import (
     PolicyConnectionError,
     PolicyServerError,
@@ -46,7 +47,6 @@ from robofollow.eval.policy import (
     server_text,
 )
 from robofollow.eval.serving import (
-    DEFAULT_HOST,
     PolicyPool,
     RequestError,
     ServerBusyError,
@@ -57,7 +57,6 @@ from robofollow.eval.serving import (
     privileged_message,
 )
 from robofollow.eval.wire import (
-    MAX_MESSAGE_BYTES,
     MessageTooBig,
     WireError,
     size_text,
@@ -150,7 +149,7 @@ class TcpPolicy:
     fail the call at once. `privileged`: whether a server may ask for privileged
     observations."""
 
-    def __init__(self, host: str, port: int, timeout: float = 60.0, retries: int = 3,
+    def __init__(self, host: str, port: int, timeout: float = CALL_TIMEOUT_S, retries: int = 3,
                  max_message: int = MAX_MESSAGE_BYTES, privileged: bool = False):
         self.address, self.timeout, self.retries = (host, port), timeout, retries
         self.max_message, self.allow_privileged = max_message, privileged

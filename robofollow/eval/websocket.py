@@ -8,7 +8,7 @@ convention: "state" (float32 [14]), "images" {cam_high, cam_left_wrist, cam_righ
 uint8 [3, H, W], "prompt" (the instruction). A server that fails sends a text message and
 closes; `robofollow serve` sends the error's type and message only (the traceback goes to its
 log). Either end closes the connection (code 1009) on a message over its size limit
-(`robofollow.eval.wire.MAX_MESSAGE_BYTES` unless configured); the client then fails the call
+(`robofollow.eval.limits.MAX_MESSAGE_BYTES` unless configured); the client then fails the call
 with the reason, without retrying.
 
 `robofollow serve` also answers `GET /healthz` with 200 (as openpi's server does), checks each
@@ -36,6 +36,7 @@ from websockets.sync.client import connect
 from websockets.sync.server import serve
 
 from robofollow.build import Compiled
+from robofollow.eval.limits import CALL_TIMEOUT_S, DEFAULT_HOST, MAX_MESSAGE_BYTES
 from robofollow.eval.policy import (
     PolicyConnectionError,
     PolicyServerError,
@@ -43,7 +44,6 @@ from robofollow.eval.policy import (
     server_text,
 )
 from robofollow.eval.serving import (
-    DEFAULT_HOST,
     PolicyPool,
     RequestError,
     ServerLimits,
@@ -52,7 +52,7 @@ from robofollow.eval.serving import (
     log,
     privileged_message,
 )
-from robofollow.eval.wire import MAX_MESSAGE_BYTES, WireError, packb, size_text, unpackb
+from robofollow.eval.wire import WireError, packb, size_text, unpackb
 
 OPENPI_USES = frozenset({"state", "instruction", "images"})
 
@@ -74,7 +74,7 @@ class WebsocketPolicy:
     `max_message` bytes are refused; `privileged`: whether the server may ask for privileged
     observations."""
 
-    def __init__(self, uri: str, timeout: float = 60.0, retries: int = 3,
+    def __init__(self, uri: str, timeout: float = CALL_TIMEOUT_S, retries: int = 3,
                  max_message: int = MAX_MESSAGE_BYTES, privileged: bool = False):
         self.uri, self.timeout, self.retries = uri, timeout, retries
         self.max_message, self.allow_privileged = max_message, privileged
