@@ -26,8 +26,10 @@ from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 from websockets.sync.server import serve
 
-from robofollow.cli import build_parser, main
+from robofollow.cli import main
+from robofollow.cli import parser as build_parser
 from robofollow.eval.episode import run_episode
+from robofollow.eval.limits import IDLE_TIMEOUT_S, MAX_CLIENTS, MAX_MESSAGE_BYTES
 from robofollow.eval.loading import PolicyLoadError, load_policy
 from robofollow.eval.policy import (
     BadActionError,
@@ -38,12 +40,12 @@ from robofollow.eval.policy import (
 )
 from robofollow.eval.report import write_report
 from robofollow.eval.runner import EvalOptions
-from robofollow.eval.serving import IDLE_TIMEOUT_S, MAX_CLIENTS, ServerLimits
+from robofollow.eval.serving import ServerLimits
 from robofollow.eval.tcp_client import TcpPolicy
 from robofollow.eval.tcp_server import TcpPolicyServer
 from robofollow.eval.websocket_client import WebsocketPolicy
 from robofollow.eval.websocket_server import PolicyServer
-from robofollow.eval.wire import MAX_MESSAGE_BYTES, packb, unpackb
+from robofollow.eval.wire import packb, unpackb
 from robofollow.resources import builtin_specs
 from robofollow.sim import robot
 from tests.server_helpers import WAIT, _array, _client, _frame, _read, served

@@ -33,6 +33,7 @@ YAW_RANGE = (-360.0, 360.0)  # deg: a placement's final yaw (`expect place ... y
 JITTER_TABLE_FRACTION = 0.1  # a jitter bound is at most this fraction of the table's depth:
 MAX_JITTER = round(JITTER_TABLE_FRACTION * min(TABLE_SIZE[:2]), 9)  # m (7 cm; nearer bodies are
 #   kept apart by the overlap check with the jitter at its extremes)
+ROUNDS = 10  # rounds per test task when a split rule does not say (`split ... rounds=`)
 MAX_ROUNDS = 100  # `split ... rounds=`: rounds per test task
 MAX_TASKS = 1000  # `split ... max=`: test tasks kept per level
 MAX_SEED = 2_000_000_000  # `split ... seed=`: an episode's seed (seed + 100 x round + an
@@ -139,7 +140,7 @@ class SplitRule(Model):
     layouts: tuple[str, ...] = ()
     wordings: tuple[str, ...] = ()
     max_tasks: int | None = None
-    rounds: int = 10
+    rounds: int = ROUNDS
     seed: int = 42
 
 

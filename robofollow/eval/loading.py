@@ -60,7 +60,7 @@ def _remote(spec: str, kind: PolicyKind) -> Policy:
     """A policy server: `ws://` or `tcp://` HOST:PORT, optionally
     `?timeout=S&retries=N&max_message=BYTES&privileged=1`: seconds per call before a retry
     (default 60); retries after a time-out or a lost connection (default 3); the largest
-    message accepted from the server (default wire.MAX_MESSAGE_BYTES, 16 MiB); whether the
+    message accepted from the server (default limits.MAX_MESSAGE_BYTES, 16 MiB); whether the
     server may have privileged observations, each episode's scene, layout and seed (default 0:
     a server that asks for them is refused; `robofollow eval --allow-privileged` adds it, and
     the run's policy records it)."""

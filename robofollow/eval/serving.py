@@ -25,15 +25,11 @@ import numpy as np
 
 from robofollow.build.pipeline import Compiled
 from robofollow.errors import RoboFollowError
+from robofollow.eval.limits import IDLE_TIMEOUT_S, MAX_CLIENTS, MAX_MESSAGE_BYTES
 from robofollow.eval.loading import load_policy
 from robofollow.eval.policy import ACTION_WIDTH, Privileged, server_text
-from robofollow.eval.wire import MAX_MESSAGE_BYTES
 from robofollow.sim.cameras import CAMERA_NAMES, IMAGE_HEIGHT, IMAGE_WIDTH
 from robofollow.sim.stage import Stage
-
-DEFAULT_HOST = "127.0.0.1"  # this machine only; 0.0.0.0 exposes a server to the network
-IDLE_TIMEOUT_S = 300.0  # a connection that sends nothing for this long is closed
-MAX_CLIENTS = 8  # connections served at once, each with its own policy instance
 
 log = logging.getLogger("robofollow.serve")
 

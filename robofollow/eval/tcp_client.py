@@ -15,7 +15,8 @@ from robofollow.eval.policy import (
     server_text,
 )
 from robofollow.eval.tcp_protocol import CAMERAS, receive_message, send_message
-from robofollow.eval.wire import MAX_MESSAGE_BYTES, MessageTooBig, WireError
+from robofollow.eval.limits import CALL_TIMEOUT_S, MAX_MESSAGE_BYTES
+from robofollow.eval.wire import MessageTooBig, WireError
 
 UPSTREAM_USES = frozenset({"state", "instruction", "images"})
 
@@ -27,7 +28,7 @@ class TcpPolicy:
     fail the call at once. `privileged`: whether a server may ask for privileged
     observations."""
 
-    def __init__(self, host: str, port: int, timeout: float = 60.0, retries: int = 3,
+    def __init__(self, host: str, port: int, timeout: float = CALL_TIMEOUT_S, retries: int = 3,
                  max_message: int = MAX_MESSAGE_BYTES, privileged: bool = False):
         self.address, self.timeout, self.retries = (host, port), timeout, retries
         self.max_message, self.allow_privileged = max_message, privileged

@@ -7,7 +7,7 @@ travel as {"__numpy_array__": true, "data": base64 bytes, "dtype", "shape"}. A p
 observation is {"observation": {"head_camera": {"rgb"}, "left_camera": {"rgb"},
 "right_camera": {"rgb"}} (uint8 H x W x 3), "joint_action": {"vector"} (14), "instruction"};
 its reply is the [T, 14] absolute joint targets. A message over the receiving end's limit
-(`robofollow.eval.wire.MAX_MESSAGE_BYTES` unless configured) is refused unread.
+(`robofollow.eval.limits.MAX_MESSAGE_BYTES` unless configured) is refused unread.
 
 Extensions only between RoboFollow ends: the server answers reset with {"robofollow":
 {version, uses, observation}} (upstream servers answer None), and then the client sends only
@@ -29,8 +29,8 @@ import time
 import numpy as np
 
 from robofollow.eval.policy import server_text
+from robofollow.eval.limits import MAX_MESSAGE_BYTES
 from robofollow.eval.wire import (
-    MAX_MESSAGE_BYTES,
     MessageTooBig,
     WireError,
     size_text,

@@ -17,8 +17,8 @@ import time
 
 from robofollow.build.pipeline import Compiled
 from robofollow.eval.policy import server_text
+from robofollow.eval.limits import DEFAULT_HOST
 from robofollow.eval.serving import (
-    DEFAULT_HOST,
     PolicyPool,
     RequestError,
     ServerBusyError,

@@ -6,7 +6,7 @@ msgpack with numpy arrays (robofollow.eval.wire). Observations follow openpi's A
 convention: "state" (float32 [14]), "images" {cam_high, cam_left_wrist, cam_right_wrist} as
 uint8 [3, H, W], "prompt" (the instruction). A server that fails sends a text message and
 closes. Either end closes the connection (code 1009) on a message over its size limit
-(`robofollow.eval.wire.MAX_MESSAGE_BYTES` unless configured); the client then fails the call
+(`robofollow.eval.limits.MAX_MESSAGE_BYTES` unless configured); the client then fails the call
 with the reason, without retrying.
 
 Extensions only between RoboFollow ends (an openpi server never sees them): a server whose
@@ -27,6 +27,7 @@ from websockets.exceptions import ConnectionClosed, InvalidURI, WebSocketExcepti
 from websockets.frames import CloseCode
 from websockets.sync.client import connect
 
+from robofollow.eval.limits import CALL_TIMEOUT_S, MAX_MESSAGE_BYTES
 from robofollow.eval.policy import (
     PolicyConnectionError,
     PolicyServerError,
@@ -34,7 +35,7 @@ from robofollow.eval.policy import (
     privileged_message,
     server_text,
 )
-from robofollow.eval.wire import MAX_MESSAGE_BYTES, WireError, packb, size_text, unpackb
+from robofollow.eval.wire import WireError, packb, size_text, unpackb
 
 OPENPI_USES = frozenset({"state", "instruction", "images"})
 
@@ -56,7 +57,7 @@ class WebsocketPolicy:
     `max_message` bytes are refused; `privileged`: whether the server may ask for privileged
     observations."""
 
-    def __init__(self, uri: str, timeout: float = 60.0, retries: int = 3,
+    def __init__(self, uri: str, timeout: float = CALL_TIMEOUT_S, retries: int = 3,
                  max_message: int = MAX_MESSAGE_BYTES, privileged: bool = False):
         self.uri, self.timeout, self.retries = uri, timeout, retries
         self.max_message, self.allow_privileged = max_message, privileged

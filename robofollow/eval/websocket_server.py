@@ -18,8 +18,8 @@ from websockets.frames import CloseCode
 from websockets.sync.server import serve
 
 from robofollow.build.pipeline import Compiled
+from robofollow.eval.limits import DEFAULT_HOST
 from robofollow.eval.serving import (
-    DEFAULT_HOST,
     PolicyPool,
     RequestError,
     ServerLimits,

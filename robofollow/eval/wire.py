@@ -1,18 +1,13 @@
 """msgpack with numpy arrays, in openpi's encoding: an array travels as the map
 {__ndarray__: True, data: raw bytes, dtype: numpy dtype string, shape: [...]}, a numpy scalar
 as {__npgeneric__: True, data, dtype}. Object and structured arrays are refused both ways
-(never pickled). Also the message size limit both protocols share."""
+(never pickled)."""
 
 from __future__ import annotations
 
 import msgpack
 import numpy as np
 
-# The largest message either end of either protocol accepts, in bytes: an observation with
-# three 320x240 camera images is under 1 MiB (msgpack) or 1.3 MiB (JSON with base64), a reply
-# a few KiB. Raised per server with `robofollow serve --max-message BYTES`, per client with
-# `--policy URL?max_message=BYTES`.
-MAX_MESSAGE_BYTES = 16 * 2 ** 20
 REFUSED_KINDS = "OV"  # object and structured/void dtypes: never decoded from the wire
 
 

@@ -16,7 +16,6 @@ from robofollow.compiler.notation import notation
 from robofollow.compiler.parser import parse
 from robofollow.errors import InstructionError
 
-KINDS = ("text", "blind", "form")
 PAD, UNKNOWN = 0, 1
 MAX_TOKENS = 32
 _WORD = re.compile(r"[a-z0-9]+")

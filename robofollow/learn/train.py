@@ -18,62 +18,22 @@ import os
 import queue
 import threading
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from tqdm import tqdm
 
-from robofollow.errors import RoboFollowError
 from robofollow.learn import checkpoint
 from robofollow.learn.demos import Demonstrations, read_demonstrations
 from robofollow.learn.model import Architecture, forward, init
-from robofollow.learn.tokens import KINDS, encode, vocabulary
+from robofollow.learn.options import TrainingError, TrainOptions
+from robofollow.learn.tokens import encode, vocabulary
 
 WARMUP = 200  # steps of linear learning-rate warm-up
 FINAL_LR = 0.1  # the cosine decay ends at this fraction of the learning rate
 VALIDATION_SAMPLES = 1024  # held-out frames scored at each checkpoint
 BETAS, EPSILON = (0.9, 0.999), 1e-8
-
-
-class TrainingError(RoboFollowError):
-    """Training cannot start or go on."""
-
-
-@dataclass(frozen=True)
-class TrainOptions:
-    dataset: str
-    kind: str = "text"
-    steps: int = 10000
-    batch: int = 64
-    learning_rate: float = 1e-3
-    seed: int = 0
-    cameras: tuple[str, ...] = ("cam_high",)
-    factor: int = 4  # 320 x 240 frames become 80 x 60
-    shift: int = 4  # pixels of random-shift augmentation
-    chunk: int = 50
-    execute: int = 25
-    val_fraction: float = 0.05
-    checkpoint_every: int = 1000
-    episodes_per_task: int | None = None  # the first N demonstrations of each task
-    variants_per_task: int | None = None  # only the first N instruction wordings of each task
-
-    def to_dict(self) -> dict:
-        return asdict(self)
-
-    def check(self) -> None:
-        """TrainingError naming the first option out of its range."""
-        problems = [(self.kind in KINDS, f"--policy {self.kind!r}: expected one of "
-                                         f"{', '.join(KINDS)}"),
-                    (self.learning_rate > 0, "--learning-rate must be positive"),
-                    (0 <= self.val_fraction <= 0.5, "--val-fraction must be within 0..0.5"),
-                    (self.shift >= 0, "--shift must be 0 or more pixels"),
-                    (self.execute <= self.chunk, f"--execute {self.execute} is more than the "
-                                                 f"{self.chunk} actions of a chunk"),
-                    (len(self.cameras) > 0, "--cameras names no camera")]
-        for ok, message in problems:
-            if not ok:
-                raise TrainingError(message)
 
 
 def resumed_options(out: Path, dataset: Path, given: dict) -> TrainOptions:

@@ -1,0 +1,50 @@
+"""`robofollow` command line: thin wrappers around library functions, one module per command
+or family of commands, each with its arguments (`add_<command>`) beside its handler
+(`cmd_<command>`)."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+from importlib.metadata import version
+
+from robofollow.cli.compile import add_audit, add_compile
+from robofollow.cli.data import add_dataset, add_generate
+from robofollow.cli.eval import add_eval, add_report
+from robofollow.cli.parse import add_parse
+from robofollow.cli.serve import add_serve
+from robofollow.cli.sim import add_expert, add_render, add_score
+from robofollow.cli.train import add_train
+from robofollow.cli.vqa import add_vqa
+from robofollow.errors import RoboFollowError
+
+
+def parser() -> argparse.ArgumentParser:
+    """The `robofollow` parser: every command, in the order its help lists them."""
+    parser = argparse.ArgumentParser(
+        prog="robofollow",
+        description="RoboFollow: measure whether robot policies really follow language "
+                    "instructions.")
+    parser.add_argument("--version", action="version",
+                        version=f"robofollow {version('robofollow')}")
+    commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+    for add in (add_parse, add_compile, add_audit, add_score, add_expert, add_render, add_eval,
+                add_report, add_serve, add_generate, add_vqa, add_train, add_dataset):
+        add(commands)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    try:
+        return args.handler(args)
+    except RoboFollowError as error:
+        text = error.render()
+        if type(error).render is RoboFollowError.render:  # a plain message: say what it is
+            text = f"error: {text}"
+        print(text, file=sys.stderr)
+        return 1
+    except BrokenPipeError:  # output piped into e.g. `head`, which stopped reading
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115  (no flush error at exit)
+        return 1

@@ -1,0 +1,7 @@
+"""`python -m robofollow.cli`."""
+
+import sys
+
+from robofollow.cli import main
+
+sys.exit(main())

@@ -1,0 +1,168 @@
+"""`robofollow eval` and `robofollow report`: a policy evaluated over the splits, and its
+report."""
+
+from __future__ import annotations
+
+import argparse
+import difflib
+import os
+from pathlib import Path
+
+from robofollow.cli.common import interrupted, positive, seconds, specs_of, specs_option
+from robofollow.compiler.spec import LEVELS, ROUNDS
+from robofollow.errors import RoboFollowError
+from robofollow.eval.deadline import DEFAULT_POLICY_TIMEOUT
+from robofollow.eval.limits import CALL_TIMEOUT_S, MAX_MESSAGE_BYTES
+from robofollow.sim import CHUNK
+from robofollow.workers import EXECUTORS
+
+
+def add_eval(commands) -> None:
+    p = commands.add_parser(
+        "eval", help="evaluate a policy over L0-L3: the paper's Table 1",
+        description="Run a policy on the compiled episodes (fixed action budget, chunks of at "
+                    f"most {CHUNK} actions, the tasks' seeds), score every episode with "
+                    "the oracle, append the results to RUN/episodes.jsonl and write "
+                    "RUN/summary.json; prints IS / ES / CR per scene and level. Interrupted "
+                    "runs continue with --resume.",
+        epilog="examples:\n  robofollow eval --policy expert --out runs/expert\n  robofollow "
+               "eval --policy expert --out runs/quick --sample 2 --rounds 1\n  robofollow "
+               "eval --policy blind --out runs/blind --levels L0,L1 --rounds 2\n  robofollow "
+               "eval --policy mypkg.policies:make --out runs/mine\n\n"
+               "A policy failure (an exception or SystemExit in the policy, invalid actions, a "
+               "call past\n--policy-timeout, a module:factory policy's process dying, a "
+               "server lost) ends its episode,\nwhich is scored as it stands and recorded "
+               "with the reason; the run goes on. A policy that\ncannot be built stops the "
+               "run before any episode.\n\nexit status: 0 the run finished; 3 it finished "
+               "and some episodes ended in a policy failure\n(counted in the summary); 1 an "
+               "error stopped it (finished episodes are kept: --resume);\n130 interrupted.",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("--policy", required=True,
+                   help="expert, blind, noop, random, baseline:NAME (a shipped baseline), a "
+                        "checkpoint folder, module:factory, ws://HOST:PORT (openpi) or "
+                        "tcp://HOST:PORT (upstream); servers take ?timeout=S&retries=N")
+    p.add_argument("--out", required=True, metavar="RUN", help="run folder")
+    specs_option(p)
+    p.add_argument("--scenes", metavar="LIST", help="comma-separated scenes (default: all)")
+    p.add_argument("--levels", metavar="LIST", help="comma-separated levels (default: all)")
+    p.add_argument("--tasks", metavar="LIST", help="comma-separated task ids, e.g. "
+                   "scene2/L0/pickup_left_cube (default: every task of the scenes and levels)")
+    p.add_argument("--sample", type=positive, metavar="N",
+                   help="only N tasks of each scene and level, evenly spread over its task "
+                        "list (a quick look; default: every task)")
+    p.add_argument("--rounds", type=positive, default=ROUNDS, metavar="N",
+                   help=f"rounds per task, each with its own seed (default: {ROUNDS})")
+    p.add_argument("--workers", type=positive, default=os.cpu_count() or 1, metavar="N",
+                   help="workers, one simulation each (default: the number of CPUs)")
+    p.add_argument("--executor", choices=EXECUTORS, default="process",
+                   help="process: a local process pool; ray: Ray actors on the cluster at "
+                        "RAY_ADDRESS, or a local one (needs robofollow[ray]); the results are "
+                        "the same (default: process)")
+    p.add_argument("--instruction-mode", choices=("normal", "empty", "shuffled"),
+                   default="normal", help="the episode's instruction, none, or another "
+                                          "task's (default: normal)")
+    p.add_argument("--video", choices=("none", "failures", "all"), default="none",
+                   help="write mp4s of these episodes to RUN/videos (default: none)")
+    p.add_argument("--policy-timeout", type=seconds, metavar="S",
+                   help="end an episode whose in-process policy takes longer than S seconds "
+                        "over a reset() or act() call, recording it as a policy failure "
+                        f"(default: {DEFAULT_POLICY_TIMEOUT:g}; servers take "
+                        f"?timeout=S&retries=N, default {CALL_TIMEOUT_S:g})")
+    p.add_argument("--allow-privileged", action="store_true",
+                   help="let a policy server (ws:// or tcp://) that asks for them have "
+                        "privileged observations: each episode's scene, layout and seed, from "
+                        "which it can rebuild the simulation's ground truth. Without it such a "
+                        "server is refused. Recorded in the run as ?privileged=1 on --policy; "
+                        "servers also take ?max_message=BYTES (largest reply, default "
+                        f"{MAX_MESSAGE_BYTES // 2 ** 20} MiB)")
+    p.add_argument("--resume", action="store_true", help="continue an interrupted run")
+    p.add_argument("--drop-corrupt", action="store_true",
+                   help="with --resume: move corrupt lines of RUN/episodes.jsonl (which stop a "
+                        "resume, with their line numbers) to RUN/episodes.jsonl.dropped and "
+                        "evaluate their episodes again")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    p.set_defaults(handler=cmd_eval)
+
+
+def cmd_eval(args) -> int:
+    from robofollow.build.pipeline import compile_specs
+    from robofollow.eval.loading import with_privileged
+    from robofollow.eval.policy_kind import is_server
+    from robofollow.eval.report import write_report
+    from robofollow.eval.runner import EvalOptions, evaluate, failures_text
+    from robofollow.eval.tables import table_text
+
+    compiled = compile_specs(specs_of(args))
+    scenes = _names(args.scenes, list(compiled.spec.scenes), "scene")
+    levels = _names(args.levels, list(LEVELS), "level")
+    known_tasks = [t.id for t in compiled.splits.tasks]
+    tasks = _names(args.tasks, known_tasks, "task") if args.tasks else []
+    if args.policy_timeout is not None and is_server(args.policy):
+        raise RoboFollowError("--policy-timeout limits in-process policies; a server takes "
+                              "its own: --policy URL?timeout=S&retries=N")
+    policy = with_privileged(args.policy) if args.allow_privileged else args.policy
+    options = EvalOptions(policy, tuple(scenes), tuple(levels), args.rounds,
+                          args.instruction_mode, args.video, compiled.spec.digest, tuple(tasks),
+                          args.sample, args.policy_timeout if args.policy_timeout is not None
+                          else None if is_server(args.policy) else DEFAULT_POLICY_TIMEOUT)
+    try:
+        result = evaluate(compiled, Path(args.out), options, args.workers, args.resume,
+                          progress=not args.quiet, executor=args.executor,
+                          drop_corrupt=args.drop_corrupt)
+    except KeyboardInterrupt:
+        return interrupted("episodes", args.out)
+    try:
+        markdown, _ = write_report(Path(args.out))
+    except OSError as error:
+        raise RoboFollowError(f"cannot write the report in {args.out}: "
+                              f"{error.strerror or error} (the results are kept; "
+                              f"robofollow report {args.out} writes it)") from None
+    print(f"{args.policy} ({args.instruction_mode} instructions), {args.out}:")
+    print(table_text(result))
+    failures = failures_text(result)
+    if failures:
+        print(failures)
+    print(f"report: {markdown} (and .html)")
+    return 3 if failures else 0
+
+
+def _names(text: str | None, known: list[str], what: str) -> list[str]:
+    """A comma-separated selection of known names (all of them when empty)."""
+    chosen = [n.strip() for n in (text or "").split(",") if n.strip()] or known
+    unknown = [n for n in chosen if n not in known]
+    if unknown:
+        hints = [m for n in unknown for m in difflib.get_close_matches(n, known, n=3)]
+        listed = (f"did you mean {', '.join(dict.fromkeys(hints))}?" if hints and len(known) > 12
+                  else f"known: {', '.join(known[:12])}{' …' if len(known) > 12 else ''}")
+        raise RoboFollowError(f"unknown {what} {', '.join(unknown)}; {listed}")
+    return [n for n in known if n in chosen]
+
+
+def add_report(commands) -> None:
+    p = commands.add_parser(
+        "report", help="rebuild a run's report, or compare two runs",
+        description="With one RUN: rebuild RUN/report.md and RUN/report.html from its results. "
+                    "With two: their Table 1 cells side by side with the differences "
+                    "(markdown, printed or written to --out).")
+    p.add_argument("runs", nargs="+", metavar="RUN", help="one or two run folders")
+    p.add_argument("--out", metavar="FILE.md", help="write the comparison here")
+    p.set_defaults(handler=cmd_report)
+
+
+def cmd_report(args) -> int:
+    from robofollow.eval.report import comparison, write_report
+
+    runs = [Path(run) for run in args.runs]
+    if len(runs) > 2:
+        raise RoboFollowError("report takes one run, or two to compare")
+    if len(runs) == 1:
+        markdown, html = write_report(runs[0])
+        print(f"wrote {markdown} and {html}")
+        return 0
+    text = comparison(runs)
+    if args.out:
+        Path(args.out).write_text(text, encoding="utf-8")
+        print(f"wrote {args.out}")
+    else:
+        print(text)
+    return 0

@@ -1,0 +1,50 @@
+"""The options of a training run, with their defaults and ranges (apart from train.py, which
+loads JAX and the video decoder, so that the command line's help quotes the defaults)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+from robofollow.errors import RoboFollowError
+
+KINDS = ("text", "blind", "form")  # what the network reads of the instruction (tokens.py)
+
+
+class TrainingError(RoboFollowError):
+    """Training cannot start or go on."""
+
+
+@dataclass(frozen=True)
+class TrainOptions:
+    dataset: str
+    kind: str = "text"
+    steps: int = 10000
+    batch: int = 64
+    learning_rate: float = 1e-3
+    seed: int = 0
+    cameras: tuple[str, ...] = ("cam_high",)
+    factor: int = 4  # 320 x 240 frames become 80 x 60
+    shift: int = 4  # pixels of random-shift augmentation
+    chunk: int = 50
+    execute: int = 25
+    val_fraction: float = 0.05
+    checkpoint_every: int = 1000
+    episodes_per_task: int | None = None  # the first N demonstrations of each task
+    variants_per_task: int | None = None  # only the first N instruction wordings of each task
+
+    def to_dict(self) -> dict:
+        return asdict(self)
+
+    def check(self) -> None:
+        """TrainingError naming the first option out of its range."""
+        problems = [(self.kind in KINDS, f"--policy {self.kind!r}: expected one of "
+                                         f"{', '.join(KINDS)}"),
+                    (self.learning_rate > 0, "--learning-rate must be positive"),
+                    (0 <= self.val_fraction <= 0.5, "--val-fraction must be within 0..0.5"),
+                    (self.shift >= 0, "--shift must be 0 or more pixels"),
+                    (self.execute <= self.chunk, f"--execute {self.execute} is more than the "
+                                                 f"{self.chunk} actions of a chunk"),
+                    (len(self.cameras) > 0, "--cameras names no camera")]
+        for ok, message in problems:
+            if not ok:
+                raise TrainingError(message)
