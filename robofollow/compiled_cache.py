@@ -38,9 +38,10 @@ SOURCES = ("build/__init__.py", "build/episode.py", "build/pipeline.py", "build/
            "compiled_cache.py", "errors.py", "resources.py", "files.py", "compiler", "audit")
 
 
-@dataclass
+@dataclass(frozen=True)
 class Episodes:
-    """The spec and every episode (in `build.all_episodes` order), parsed when asked for."""
+    """The spec and every episode (in `build.rounds.all_episodes` order), each parsed when asked
+    for (a fresh object every time)."""
 
     spec: Spec
     ids: tuple[str, ...]

@@ -100,3 +100,9 @@ class SpecErrors(RoboFollowError):
         count = len(self.errors)
         return "\n".join([e.render() for e in self.errors] +
                          [f"{count} error{'s' if count != 1 else ''} in the specs"])
+
+
+def error_text(error: BaseException) -> str:
+    """An exception in words: 'Type: message', or its repr when it says nothing."""
+    text = str(error)
+    return f"{type(error).__name__}: {text}" if text else repr(error)

@@ -1,11 +1,15 @@
-"""Small file helpers shared by the dataset writers."""
+"""File helpers for every floor: JSON and JSON Lines writing and reading, atomic writes,
+links, where a byte that is not UTF-8 sits."""
 
 from __future__ import annotations
 
 import json
 import os
 import shutil
+from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 
 def write_json(path: Path, data) -> None:
@@ -55,3 +59,50 @@ def changed_options(previous: dict, current: dict) -> str | None:
         return None
     return (f"was run with other options ({', '.join(changed)} differ); resume with the same "
             "options or choose another folder")
+
+
+def not_utf8(data: bytes, error: UnicodeDecodeError) -> tuple[int, int, str, str]:
+    """(line, column, the line as text, what is wrong) of the first byte that is not UTF-8
+    (the column counts characters, as an editor does)."""
+    start = error.start
+    line_start = data.rfind(b"\n", 0, start) + 1
+    line_end = data.find(b"\n", start)
+    line = data.count(b"\n", 0, start) + 1
+    column = len(data[line_start:start].decode("utf-8")) + 1
+    shown = data[line_start:line_end if line_end >= 0 else len(data)].decode(
+        "utf-8", errors="replace").removesuffix("\r")
+    return line, column, shown, f"the file is not UTF-8 text: byte 0x{data[start]:02x} " \
+                                f"({error.reason})"
+
+
+@dataclass(frozen=True)
+class JsonLine:
+    """One line of JSON Lines data: its number (from 1), its bytes, and its value, or what
+    is wrong with it: `problem` says it ("not UTF-8 text (byte 0xff)", "not JSON (...)"),
+    `column` where (in characters), `text` whether it was UTF-8 text at least."""
+
+    number: int
+    raw: bytes
+    value: Any = None
+    problem: str | None = None
+    column: int | None = None
+    text: bool = True
+
+
+def json_lines(data: bytes) -> Iterator[JsonLine]:
+    """The lines of JSON Lines data that are not blank, split at "\n" only (U+2028 and U+2029
+    stay inside their record)."""
+    for number, raw in enumerate(data.split(b"\n"), start=1):
+        if not raw.strip():
+            continue
+        try:
+            value = json.loads(raw.decode("utf-8"))
+        except UnicodeDecodeError as error:
+            _, column, _, _ = not_utf8(raw, error)
+            yield JsonLine(number, raw, problem=f"not UTF-8 text (byte 0x{raw[error.start]:02x})",
+                           column=column, text=False)
+        except json.JSONDecodeError as error:
+            yield JsonLine(number, raw, problem=f"not JSON ({error.msg} at column "
+                                                f"{error.colno})", column=error.colno)
+        else:
+            yield JsonLine(number, raw, value)

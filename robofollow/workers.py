@@ -27,7 +27,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from multiprocessing.connection import wait
 
-from robofollow.errors import RoboFollowError
+from robofollow.errors import RoboFollowError, error_text
 
 EXECUTORS = ("process", "ray")
 Lost = Callable[[object, str], object]  # (item, how its process ended) -> the item's result
@@ -73,11 +73,6 @@ def results(make: Callable, items: list, workers: int, executor: str = "process"
 _STOP = None  # sent to a worker process: close and leave
 
 
-def _failure_text(error: BaseException) -> str:
-    text = str(error)
-    return f"{type(error).__name__}: {text}" if text else repr(error)
-
-
 def _serve(make: Callable, conn) -> None:
     """A worker process: make the worker, then run the items the pipe brings, one at a time."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
@@ -85,7 +80,7 @@ def _serve(make: Callable, conn) -> None:
         worker = make()
     except BaseException as error:  # noqa: B036 (reported to the parent, which stops the run)
         reported = isinstance(error, RoboFollowError)
-        conn.send(("failed", (error.render() if reported else _failure_text(error), reported)))
+        conn.send(("failed", (error.render() if reported else error_text(error), reported)))
         return
     conn.send(("ready", os.getpid()))
     try:
@@ -122,7 +117,7 @@ def _portable(error: Exception) -> tuple:
     try:
         pickle.loads(pickle.dumps(error))
     except Exception:
-        error = RuntimeError(_failure_text(error))
+        error = RuntimeError(error_text(error))
     return error, text
 
 
@@ -258,7 +253,7 @@ class _Actor:
             self.worker = make()
         except Exception as error:  # said by ready(), once, rather than at every call
             reported = isinstance(error, RoboFollowError)
-            self.problem = (error.render() if reported else _failure_text(error), reported)
+            self.problem = (error.render() if reported else error_text(error), reported)
 
     def ready(self):
         return self.problem

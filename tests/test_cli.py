@@ -5,13 +5,7 @@ import json
 import subprocess
 import sys
 
-from robofollow import cli
-
-
-def run(capsys, *argv):
-    status = cli.main(list(argv))
-    out, err = capsys.readouterr()
-    return status, out, err
+from tests.cli_helpers import run
 
 
 def test_parse_prints_form_and_english(capsys):

@@ -9,7 +9,7 @@ import numpy as np
 from PIL import Image
 
 from robofollow.resources import builtin_specs
-from tests.test_cli import run
+from tests.cli_helpers import run
 
 SPECS = str(builtin_specs())
 

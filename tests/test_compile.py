@@ -11,7 +11,7 @@ from robofollow.build.pipeline import compile_specs
 from robofollow.audit.splits import findings
 from robofollow.audit.task_list import ListedTask, audit_task_list, task_list
 from robofollow.resources import builtin_specs
-from tests.test_spec_loader import edit
+from tests.spec_helpers import edit
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
 TARGETS = {"scene1": [16, 8, 16, 76], "scene2": [16, 24, 68, 24], "scene3": [16, 40, 64, 96],

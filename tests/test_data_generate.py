@@ -16,6 +16,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
+from robofollow.build.rounds import find_episode
 from robofollow.cli import main
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.data.check import check
@@ -61,11 +62,11 @@ def _frames(root: Path, index: int) -> dict[str, np.ndarray]:
 
 
 def _env(record: dict) -> RoboFollowEnv:
-    """The env on the demonstration's layout and seed."""
-    episode = {"episode": f"{record['label']}#demo", "scene": record["scene"],
-               "level": "train", "layout": record["layout"], "seed": record["seed"],
-               "instruction": record["tasks"][0]}
-    return RoboFollowEnv(episode=episode)
+    """The env on the demonstration's layout and seed (its task's L0 episode, reseeded)."""
+    episode = find_episode(benchmark(), f"{record['scene']}/L0/{record['label']}#r1")
+    assert episode.layout == record["layout"]
+    return RoboFollowEnv(episode=episode.model_copy(
+        update={"seed": record["seed"], "instruction": record["tasks"][0]}))
 
 
 def test_a_small_run_validates_with_dataset_check(dataset, capsys):

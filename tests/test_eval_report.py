@@ -9,35 +9,14 @@ import pytest
 
 from robofollow.cli import main
 from robofollow.eval.report import ReportError, comparison, report_data, write_report
-from robofollow.eval.runner import EvalOptions
-
-OPTIONS = EvalOptions("mine:make", ("scene2",), ("L0", "L1"), 1, "normal", "none", "0" * 64)
-
-
-def _record(task: str, level: str, intent: float, execution: float, complete: bool,
-            match: str | None, reason: str = "", error: str | None = None,
-            instruction: str = "", layout: str = "default") -> dict:
-    stages = [{"stage": "source", "name": "source_grounding", "weight": 0.8,
-               "intent": 0.8 * intent, "execution": 0.8 * execution, "first_step": None,
-               "reason": reason},
-              {"stage": "finish", "name": "finish", "weight": 0.2, "intent": 0.2 * intent,
-               "execution": 0.2 * execution, "first_step": None, "reason": ""}]
-    return {"episode": f"scene2/{level}/{task}#r1", "scene": "scene2", "level": level,
-            "task": f"scene2/{level}/{task}", "layout": layout,
-            "instruction": instruction or f"Use your left arm to {task.replace('_', ' ')}.",
-            "intent_score": intent,
-            "execution_score": execution, "complete": complete, "stages": stages,
-            "executed_behaviour": {"match": match, "description": "", "behaviour": None,
-                                   "intent_score": 0, "execution_score": 0},
-            "error": error}
-
+from tests.report_helpers import OPTIONS, fake_record
 
 RESULTS = [
-    _record("pickup_left_cube", "L0", 1.0, 1.0, True, "instructed"),
-    _record("pickup_right_cube", "L0", 1.0, 0.0, False, None, "the cube slipped"),
-    _record("pickup_right_cube", "L1", 0.0, 0.0, False, "pickup_left_cube",
+    fake_record("pickup_left_cube", "L0", 1.0, 1.0, True, "instructed"),
+    fake_record("pickup_right_cube", "L0", 1.0, 0.0, False, None, "the cube slipped"),
+    fake_record("pickup_right_cube", "L1", 0.0, 0.0, False, "pickup_left_cube",
             "the left arm first closed on large_blue_cube"),
-    _record("push_left_cube", "L1", 0.0, 0.0, False, None, "never closed",
+    fake_record("push_left_cube", "L1", 0.0, 0.0, False, None, "never closed",
             error="step 50: the policy raised RuntimeError: boom"),
 ]
 
@@ -105,7 +84,7 @@ def test_two_runs_compare_side_by_side(run, tmp_path, capsys):
     other.mkdir()
     (other / "run.json").write_text(json.dumps(OPTIONS.to_json()))
     (other / "episodes.jsonl").write_text(json.dumps(
-        _record("pickup_left_cube", "L0", 0.0, 0.0, False, None)) + "\n")
+        fake_record("pickup_left_cube", "L0", 0.0, 0.0, False, None)) + "\n")
     text = comparison([run, other])
     assert "| scene2 | L0 | 100.0 | 0.0 | -100.0 |" in text
     assert "| scene2 | L1 | 0.0 | - | - |" in text

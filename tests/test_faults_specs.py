@@ -22,7 +22,7 @@ import pytest
 from robofollow import cli
 from robofollow.build import output
 from robofollow.compiler.spec import MAX_BODIES, MAX_LAYOUTS, MAX_SPEC_BYTES, MAX_STACK
-from tests.test_spec_loader import VALID
+from tests.spec_helpers import VALID
 
 MARK = "«"
 BIG = "9" * 400  # a number that overflows to infinity

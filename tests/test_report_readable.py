@@ -11,7 +11,7 @@ from collections import Counter
 from dataclasses import replace
 
 from robofollow.eval.report import DID, NAME_CHARS, report_data, write_report
-from tests.test_eval_report import OPTIONS, _record
+from tests.report_helpers import OPTIONS, fake_record
 
 PLACE = ("Use your right arm to pick up the smaller blue object and place it in the {} bowl, "
          "then go home.")
@@ -37,7 +37,7 @@ def _records(matches: list[str | None], rounds: int = 1) -> list[dict]:
     for number, (task, text) in enumerate(INSTRUCTIONS.items()):
         for round_ in range(1, rounds + 1):
             match = matches[(number * rounds + round_) % len(matches)]
-            record = _record(task, "L2", 0.0, 0.0, match == "instructed", match,
+            record = fake_record(task, "L2", 0.0, 0.0, match == "instructed", match,
                              instruction=text, layout=LAYOUTS.get(task, "default"))
             records.append(dict(record, episode=f"{record['task']}#r{round_}"))
     return records

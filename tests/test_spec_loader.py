@@ -8,6 +8,7 @@ import pytest
 from robofollow.build.pipeline import compile_specs
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.errors import SpecErrors
+from tests.spec_helpers import VALID, edit
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
 TRAINING = json.loads((Path(__file__).parent / "data" / "training_instructions.json").read_text())
@@ -53,38 +54,11 @@ def test_the_digest_follows_the_text(tmp_path):
     assert load_spec(tmp_path).digest != first
 
 
-VALID = """\
-scene demo "Demo" {
-    point p1 (0.1, 0.0)
-    object red_cube cube half=0.02 color=red rgb=(1, 0, 0) mass=0.2 friction=0.1
-    object blue_cube cube half=0.02 color=blue rgb=(0, 0, 1) mass=0.2 friction=0.1
-    fixture bowl bowl radius=0.05 half_height=0.02 color=green rgb=(0, 1, 0)
-    jitter * x=[-0.01, 0.01] y=[-0.01, 0.01]
-    layout base {
-        red_cube at (-0.1, 0.0)
-        blue_cube at p1
-        bowl at (0.0, -0.15)
-    }
-    layout swapped from base { swap red_cube blue_cube }
-    task pick_red on base {
-        "Pick up the red cube with your left arm."
-        expect pick left red_cube
-    }
-    split L1 layouts=(swapped) rounds=10 seed=42
-}
-"""
-
-
 def errors_of(tmp_path, text, name="bad.rf"):
     (tmp_path / name).write_text(text)
     with pytest.raises(SpecErrors) as caught:
         load_spec(tmp_path)
     return caught.value.errors
-
-
-def edit(old, new):
-    assert old in VALID
-    return VALID.replace(old, new, 1)
 
 
 # (spec text, error code, line, column)

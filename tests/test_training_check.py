@@ -8,7 +8,7 @@ import pytest
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.training import check_training, describe
 from robofollow.errors import SpecErrors
-from tests.test_spec_loader import edit
+from tests.spec_helpers import edit
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
 GOLDEN = json.loads((Path(__file__).parent / "data" / "training_behaviours.json").read_text())

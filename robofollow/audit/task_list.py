@@ -37,10 +37,11 @@ from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
 from robofollow.compiler.parser import parse
 from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import LEVELS, Spec
-from robofollow.compiler.spec_files import Sources, not_utf8, spec_error
+from robofollow.compiler.spec_files import Sources, spec_error
 from robofollow.compiler.splits import TestTask
 from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
 from robofollow.errors import InstructionError, RoboFollowError, SpecError
+from robofollow.files import json_lines
 from robofollow.audit.splits import SeenTasks, TrainingFacts
 
 FINDING_KINDS = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "route",
@@ -282,18 +283,13 @@ def read_task_list(path) -> list[ListedTask]:
         data = path.read_bytes()
     except OSError as error:
         raise RoboFollowError(f"cannot read {path}: {error.strerror}") from None
-    try:
-        lines = data.decode("utf-8").split("\n")
-    except UnicodeDecodeError as error:
-        line, column, _, _ = not_utf8(data, error)
-        raise RoboFollowError(f"{path}:{line}:{column}: not UTF-8 text (byte "
-                              f"0x{data[error.start]:02x})") from None
     tasks, seen = [], {}
-    for number, line in enumerate(lines, start=1):
-        if not line.strip():
-            continue
+    for line in json_lines(data):
+        number = line.number
+        if not line.text:
+            raise RoboFollowError(f"{path}:{number}:{line.column}: {line.problem}")
         try:
-            task = ListedTask.model_validate_json(line)
+            task = ListedTask.model_validate_json(line.raw)  # (says what is wrong, field by field)
         except ValidationError as error:
             problems = "; ".join(f"{'.'.join(map(str, p['loc'])) or 'line'}: {p['msg']}"
                                  for p in error.errors())

@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from robofollow.cli.common import image_size, interrupted, positive, specs_argument, specs_of
-from robofollow.data.jobs import FORMATS, INSTRUCTION_MODES
+from robofollow.data.jobs import FORMATS, DEMO_INSTRUCTIONS
 from robofollow.errors import RoboFollowError
 
 
@@ -38,7 +38,7 @@ def add_generate(commands) -> None:
                    default="lerobot-v2.1", help="dataset format (default: lerobot-v2.1)")
     p.add_argument("--image-size", type=image_size, default=(320, 240), metavar="WxH",
                    help="camera image size (default: 320x240)")
-    p.add_argument("--instructions", choices=INSTRUCTION_MODES, default="sample",
+    p.add_argument("--instructions", choices=DEMO_INSTRUCTIONS, default="sample",
                    help="sample: one paraphrase per episode; all: every paraphrase as its own "
                         "episode (default: sample)")
     p.add_argument("--resume", action="store_true",

@@ -13,6 +13,7 @@ from robofollow.compiler.spec import LEVELS, ROUNDS
 from robofollow.errors import RoboFollowError
 from robofollow.eval.deadline import DEFAULT_POLICY_TIMEOUT
 from robofollow.eval.limits import CALL_TIMEOUT_S, MAX_MESSAGE_BYTES
+from robofollow.eval.modes import INSTRUCTION_MODES, VIDEO_MODES
 from robofollow.sim import CHUNK
 from robofollow.workers import EXECUTORS
 
@@ -58,10 +59,10 @@ def add_eval(commands) -> None:
                    help="process: a local process pool; ray: Ray actors on the cluster at "
                         "RAY_ADDRESS, or a local one (needs robofollow[ray]); the results are "
                         "the same (default: process)")
-    p.add_argument("--instruction-mode", choices=("normal", "empty", "shuffled"),
+    p.add_argument("--instruction-mode", choices=INSTRUCTION_MODES,
                    default="normal", help="the episode's instruction, none, or another "
                                           "task's (default: normal)")
-    p.add_argument("--video", choices=("none", "failures", "all"), default="none",
+    p.add_argument("--video", choices=VIDEO_MODES, default="none",
                    help="write mp4s of these episodes to RUN/videos (default: none)")
     p.add_argument("--policy-timeout", type=seconds, metavar="S",
                    help="end an episode whose in-process policy takes longer than S seconds "

@@ -206,7 +206,7 @@ class LayoutResolver:
                      else bottom + BOWL_FLOOR + half)
                 placed[body] = Placed(x=support.x, y=support.y, z=z, support=value, relation=how)
         self.check_overlaps(placed, where)
-        return placed  # in the order the recursive walk placed them: supports first
+        return placed  # supports before what rests on them
 
     def report(self, key: tuple, code: str, message: str, where: Token) -> None:
         """A problem of poses, reported at the first layout that has it (a derived layout

@@ -28,6 +28,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
+from pydantic import ValidationError
+
 from robofollow.compiler import lf
 from robofollow.compiler.syntax import (
     NP,
@@ -482,8 +484,7 @@ class Semantics:
         try:
             return self.extend(self.head_noun(np, domain), constraints, meanings)
         except ValueError as error:  # e.g. two ordinals for one object
-            raise self.fail(np.column, str(error).splitlines()[-1].split(", input")[0]
-                            .removeprefix("  Value error, ")) from None
+            raise self.fail(np.column, _reason(error)) from None
 
     def simple(self, np: NP) -> lf.Ref:
         """A landmark: a noun phrase described by its own words only."""
@@ -645,3 +646,12 @@ class Semantics:
         if kind == "source":
             relation = "on"
         return Meaning(kind, pp.column, relation, landmark)
+
+
+def _reason(error: ValueError) -> str:
+    """What a failed check of a logical form says (pydantic's first error, unwrapped)."""
+    if isinstance(error, ValidationError):
+        first = error.errors(include_url=False)[0]
+        cause = first.get("ctx", {}).get("error")
+        return str(cause) if cause is not None else first["msg"]
+    return str(error)

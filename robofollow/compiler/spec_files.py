@@ -14,6 +14,7 @@ from pathlib import Path
 
 from robofollow.compiler.spec import MAX_SPEC_BYTES, Source
 from robofollow.errors import SpecError
+from robofollow.files import not_utf8
 
 SPEC_SUFFIX = ".rf"
 
@@ -88,20 +89,6 @@ def _read(path: Path | str) -> bytes:
     if len(data) > MAX_SPEC_BYTES:
         raise OSError(f"more than a spec file may hold ({MAX_SPEC_BYTES} bytes)")
     return data
-
-
-def not_utf8(data: bytes, error: UnicodeDecodeError) -> tuple[int, int, str, str]:
-    """(line, column, the line as text, what is wrong) of the first byte that is not UTF-8
-    (the column counts characters, as an editor does)."""
-    start = error.start
-    line_start = data.rfind(b"\n", 0, start) + 1
-    line_end = data.find(b"\n", start)
-    line = data.count(b"\n", 0, start) + 1
-    column = len(data[line_start:start].decode("utf-8")) + 1
-    shown = data[line_start:line_end if line_end >= 0 else len(data)].decode(
-        "utf-8", errors="replace").removesuffix("\r")
-    return line, column, shown, f"the file is not UTF-8 text: byte 0x{data[start]:02x} " \
-                                f"({error.reason})"
 
 
 def split_lines(text: str) -> tuple[str, ...]:

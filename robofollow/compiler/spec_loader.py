@@ -19,6 +19,8 @@ import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+from lark import Token
+
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Step
 from robofollow.compiler.layouts import LayoutResolver
@@ -374,15 +376,8 @@ class _Loader(Checks):
         if layout not in layouts:
             self.error("undefined-layout", f"no layout named {layout!s} in {scene}", layout)
             ok = False
-        forms = []
-        for string in strings:
-            try:
-                forms.append(parse(string[1:-1]))
-            except InstructionError as error:
-                self.error(f"instruction-{error.code}", error.message,
-                           Source(file=self.file, line=string.line,
-                                  column=string.column + error.column), error.length)
-                ok = False
+        forms = [self.instruction(string) for string in strings]
+        ok = ok and None not in forms
         expected = self.expected(expect, bodies) if expect is not None else None
         if not ok or (expect is not None and expected is None):
             return None
@@ -390,6 +385,17 @@ class _Loader(Checks):
                     paraphrases=tuple(s[1:-1] for s in strings), forms=tuple(forms),
                     expect=expected, source=self.source(label),
                     paraphrase_sources=tuple(self.source(s) for s in strings))
+
+    def instruction(self, string: Token):
+        """The logical form of a quoted instruction, or None with its error reported at the
+        word that causes it."""
+        try:
+            return parse(string[1:-1])
+        except InstructionError as error:
+            self.error(f"instruction-{error.code}", error.message,
+                       Source(file=self.file, line=string.line,
+                              column=string.column + error.column), error.length)
+            return None
 
     def test(self, item: TestNode, scene: str, bodies: dict[str, Body],
              layouts: set[str]) -> ListedTest | None:
@@ -405,13 +411,7 @@ class _Loader(Checks):
         if layout not in layouts:
             self.error("undefined-layout", f"no layout named {layout!s} in {scene}", layout)
             ok = False
-        try:
-            parse(string[1:-1])
-        except InstructionError as error:
-            self.error(f"instruction-{error.code}", error.message,
-                       Source(file=self.file, line=string.line,
-                              column=string.column + error.column), error.length)
-            ok = False
+        ok = self.instruction(string) is not None and ok
         expected = self.expected(expect, bodies) if expect is not None else None
         if not ok or (expect is not None and expected is None):
             return None

@@ -25,6 +25,7 @@ import pyarrow.parquet as pq
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
 from robofollow.data.lerobot import VIDEO_KEYS
 from robofollow.data.stats import BINS, QUANTILE_KEYS, array_stats
+from robofollow.files import json_lines
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
 from robofollow.sim.video import probe
@@ -101,15 +102,17 @@ def _load_json(path: Path, report: Report):
 
 
 def _load_jsonl(path: Path, report: Report) -> list[dict]:
-    records = []
     try:
-        for number, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
-            try:
-                records.append(json.loads(line))
-            except ValueError as error:
-                report.error(f"{path.name}:{number}", f"not JSON: {error}")
+        data = path.read_bytes()
     except OSError as error:
         report.error(path.name, f"unreadable: {error}")
+        return []
+    records = []
+    for line in json_lines(data):
+        if line.problem:
+            report.error(f"{path.name}:{line.number}:{line.column}", line.problem)
+        else:
+            records.append(line.value)
     return records
 
 

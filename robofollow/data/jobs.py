@@ -21,7 +21,7 @@ if TYPE_CHECKING:  # the CLI reads this module's constants without loading the c
 # rounds few), so no training demonstration shares a jittered start with a test episode.
 DEMO_SEED_BASE = 1_000_000
 MAX_ATTEMPTS = 10  # seeds tried per episode before the run stops with an error
-INSTRUCTION_MODES = ("sample", "all")
+DEMO_INSTRUCTIONS = ("sample", "all")  # one sampled paraphrase per demonstration, or all
 FORMATS = ("lerobot-v2.1", "lerobot-v3.0", "hdf5")
 
 
@@ -87,8 +87,8 @@ def select_tasks(compiled: Compiled, names: list[str] | None) -> list[str]:
 def demo_jobs(compiled: Compiled, per_task: int, labels: list[str],
               instructions: str = "sample") -> list[DemoJob]:
     """Every job, task by task in spec order, episode index ascending."""
-    if instructions not in INSTRUCTION_MODES:
-        raise ValueError(f"instructions must be one of {INSTRUCTION_MODES}, got {instructions!r}")
+    if instructions not in DEMO_INSTRUCTIONS:
+        raise ValueError(f"instructions must be one of {DEMO_INSTRUCTIONS}, got {instructions!r}")
     tasks = {task.label: task for task in compiled.spec.tasks}
     jobs = []
     for label in labels:

@@ -12,8 +12,8 @@ from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import ground
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
+from robofollow.eval.modes import INSTRUCTION_MODES
 
-INSTRUCTION_MODES = ("normal", "empty", "shuffled")
 
 
 def given_instruction(compiled: Compiled, episode: Episode, mode: str) -> str:

@@ -13,7 +13,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-from robofollow.files import changed_options, json_line, write_json_atomic
+from robofollow.files import changed_options, json_line, json_lines, write_json_atomic
 from robofollow.errors import RoboFollowError
 
 RUN_FILE, RESULTS, SUMMARY, LOCK = "run.json", "episodes.jsonl", "summary.json", ".lock"
@@ -76,26 +76,17 @@ def _scan(path: Path) -> tuple[list[dict], list[bytes], list[tuple[int, bytes, s
         with open(path, "r+b") as f:
             f.truncate(len(whole))
     records, lines, corrupt, seen = [], [], [], {}
-    for number, line in enumerate(whole.split(b"\n")[:-1], start=1):
-        if not line.strip():
-            continue
-        why = None
-        try:
-            record = json.loads(line.decode("utf-8"))
-        except UnicodeDecodeError as error:
-            why = f"not UTF-8 text (byte {error.start + 1})"
-        except json.JSONDecodeError as error:
-            why = f"not JSON ({error.msg} at column {error.colno})"
-        else:
-            why = _record_problem(record)
-            if why is None and record["episode"] in seen:
-                why = f"repeats episode {record['episode']} of line {seen[record['episode']]}"
+    for line in json_lines(whole):
+        record = line.value
+        why = line.problem or _record_problem(record)
+        if why is None and record["episode"] in seen:
+            why = f"repeats episode {record['episode']} of line {seen[record['episode']]}"
         if why is not None:
-            corrupt.append((number, line, why))
+            corrupt.append((line.number, line.raw, why))
             continue
-        seen[record["episode"]] = number
+        seen[record["episode"]] = line.number
         records.append(record)
-        lines.append(line)
+        lines.append(line.raw)
     return records, lines, corrupt
 
 

@@ -34,7 +34,7 @@ from tqdm import tqdm
 from robofollow.build.episode import Episode
 from robofollow.build.pipeline import Compiled
 from robofollow.build.rounds import all_episodes
-from robofollow.errors import RoboFollowError
+from robofollow.errors import RoboFollowError, error_text
 from robofollow.eval.chance import references
 from robofollow.eval.episode import EpisodeRun, run_episode
 from robofollow.eval.instructions import given_instruction
@@ -60,8 +60,6 @@ from robofollow.sim.simulation import CONTROL_HZ
 from robofollow.sim.stage import Stage
 from robofollow.sim.video import write_video
 from robofollow.workers import WorkerStartError, results
-
-VIDEO_MODES = ("none", "failures", "all")
 
 
 class EvalPolicyError(EvalRunError):
@@ -173,11 +171,6 @@ class Evaluator:
         self.stage.close()
 
 
-def _text(error: BaseException) -> str:
-    text = str(error)
-    return f"{type(error).__name__}: {text}" if text else repr(error)
-
-
 def build_policy(spec: str):
     """The --policy's policy, or EvalPolicyError naming it and saying what went wrong (a
     factory that raises or exits included)."""
@@ -191,7 +184,7 @@ def build_policy(spec: str):
         raise EvalPolicyError(error.render()) from None
     except BaseException as error:  # noqa: B036 (a factory's bug, SystemExit included)
         raise EvalPolicyError(f"--policy {spec!r}: the policy could not be built: "
-                              f"{_text(error)}") from None
+                              f"{error_text(error)}") from None
 
 
 class _LostEpisodes:

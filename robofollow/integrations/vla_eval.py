@@ -66,7 +66,7 @@ class RoboFollowBenchmark(StepBenchmark):
         # Imported here, after configure_render: MuJoCo binds its GL backend when imported.
         from robofollow.build.pipeline import compile_specs
         from robofollow.compiler.spec import LEVELS
-        from robofollow.eval.instructions import INSTRUCTION_MODES
+        from robofollow.eval.modes import INSTRUCTION_MODES
         from robofollow.eval.runner import EvalOptions, select_episodes
         from robofollow.resources import builtin_specs
         from robofollow.sim import MAX_STEPS

@@ -24,6 +24,7 @@ from robofollow.data import lerobot_v21, lerobot_v30
 from robofollow.data.lerobot import vectors
 from robofollow.data.sinks import image_key
 from robofollow.errors import RoboFollowError
+from robofollow.files import json_lines
 
 
 class DatasetError(RoboFollowError):
@@ -91,12 +92,15 @@ def _json(path: Path) -> dict:
 
 
 def _v21_episodes(root: Path) -> list[dict]:
+    path = root / "meta" / "episodes.jsonl"
     try:
-        lines = (root / "meta" / "episodes.jsonl").read_text().splitlines()
-        episodes = [json.loads(line) for line in lines if line.strip()]
-    except (OSError, ValueError) as error:
-        raise DatasetError(f"{root}/meta/episodes.jsonl: {error}") from None
-    return sorted(episodes, key=lambda e: e["episode_index"])
+        lines = list(json_lines(path.read_bytes()))
+    except OSError as error:
+        raise DatasetError(f"{path}: {error}") from None
+    for line in lines:
+        if line.problem:
+            raise DatasetError(f"{path}:{line.number}:{line.column}: {line.problem}")
+    return sorted((line.value for line in lines), key=lambda e: e["episode_index"])
 
 
 def _v30_episodes(root: Path) -> list[dict]:

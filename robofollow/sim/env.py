@@ -41,7 +41,7 @@ INSTRUCTION_CHARSET = frozenset(string.printable) - frozenset("\t\n\r\x0b\x0c")
 class RoboFollowEnv(gym.Env):
     metadata = {"render_modes": ["rgb_array"], "render_fps": CONTROL_HZ}
 
-    def __init__(self, episode: str | dict | None = None, specs: str | Path | None = None,
+    def __init__(self, episode: str | Episode | None = None, specs: str | Path | None = None,
                  width: int = 320, height: int = 240, max_steps: int = MAX_STEPS,
                  render_mode: str | None = "rgb_array", scene: str | None = None,
                  level: str | None = None):
@@ -66,11 +66,9 @@ class RoboFollowEnv(gym.Env):
         self.steps = self.clipped = 0  # clipped: actions with a target past a joint limit
         self.command = robot.home_state()
 
-    def _episode(self, episode: str | dict | Episode) -> Episode:
-        """An episode given by id, as a compiled episode, or as its JSON record."""
-        if isinstance(episode, str):
-            return self.benchmark.record(episode)
-        return Episode.model_validate(episode) if isinstance(episode, dict) else episode
+    def _episode(self, episode: str | Episode) -> Episode:
+        """An episode given by id, or a compiled episode."""
+        return self.benchmark.record(episode) if isinstance(episode, str) else episode
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)

@@ -7,11 +7,11 @@ to ANSWERS.jsonl), so a copy of questions.jsonl with a "prediction" added to eac
 
 from __future__ import annotations
 
-import json
 from collections import defaultdict
 from pathlib import Path
 
 from robofollow.errors import RoboFollowError
+from robofollow.files import json_lines
 from robofollow.vqa.answers import Expected
 from robofollow.vqa.score import score
 
@@ -22,20 +22,16 @@ class GradeError(RoboFollowError):
 
 def _read_jsonl(path: Path) -> list[tuple[int, dict]]:
     try:
-        lines = path.read_text(encoding="utf-8").splitlines()
+        data = path.read_bytes()
     except OSError as error:
         raise GradeError(f"cannot read {path}: {error.strerror}") from None
     records = []
-    for number, line in enumerate(lines, start=1):
-        if not line.strip():
-            continue
-        try:
-            record = json.loads(line)
-        except json.JSONDecodeError as error:
-            raise GradeError(f"{path}:{number}:{error.colno}: not JSON: {error.msg}") from None
-        if not isinstance(record, dict):
-            raise GradeError(f"{path}:{number}: expected an object per line")
-        records.append((number, record))
+    for line in json_lines(data):
+        if line.problem:
+            raise GradeError(f"{path}:{line.number}:{line.column}: {line.problem}")
+        if not isinstance(line.value, dict):
+            raise GradeError(f"{path}:{line.number}: expected an object per line")
+        records.append((line.number, line.value))
     return records
 
 

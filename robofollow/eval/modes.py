@@ -1,0 +1,5 @@
+"""The choices an evaluation run takes, with no imports, so that the command line offers them
+without loading the harness."""
+
+INSTRUCTION_MODES = ("normal", "empty", "shuffled")  # the episode's, none, or another task's
+VIDEO_MODES = ("none", "failures", "all")  # which episodes get an mp4
