@@ -15,13 +15,13 @@ import tempfile
 import time
 from pathlib import Path
 
+from robofollow.audit.splits import audit
 from robofollow.build.output import write
 from robofollow.build.pipeline import Compiled
 from robofollow.compiler import parser
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.splits import generate
 from robofollow.compiler.training import check_training
-from robofollow.audit.splits import audit
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -41,7 +41,7 @@ def run_once(specs: Path) -> dict[str, float]:
     times["audit"] = time.perf_counter() - mark
     mark = time.perf_counter()
     with tempfile.TemporaryDirectory() as out:
-        write(Compiled(spec, splits, report, training), Path(out))
+        write(Compiled.of(spec, splits, training, report), Path(out))
     times["write outputs"] = time.perf_counter() - mark
     times["total"] = time.perf_counter() - started
     return times

@@ -26,11 +26,11 @@ import tempfile
 import time
 from pathlib import Path
 
-import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
 import mujoco
 import numpy as np
 import pyarrow.parquet as pq
 
+import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
 from robofollow.build.pipeline import compile_specs
 from robofollow.data.generate import generate
 from robofollow.data.jobs import demo_jobs

@@ -18,10 +18,10 @@ import multiprocessing
 import statistics
 import time
 
-import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
 import mujoco
 import numpy as np
 
+import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
 from robofollow.build.episode import Episode
 from robofollow.build.pipeline import compile_specs
 from robofollow.resources import builtin_specs

@@ -4,8 +4,8 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.compiler.spec_loader import load_spec
 from robofollow.audit.entropy import entropy_bits, scene_entropy, scene_groups
+from robofollow.compiler.spec_loader import load_spec
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
 

@@ -9,11 +9,11 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 from robofollow.build.rounds import UnknownEpisodeError
+from robofollow.compiler.plans import plan
+from robofollow.oracle.score import score
 from robofollow.sim import robot
 from robofollow.sim.env import RoboFollowEnv
 from robofollow.sim.expert import Expert
-from robofollow.compiler.plans import plan
-from robofollow.oracle.score import score
 from tests.sim_helpers import benchmark
 
 

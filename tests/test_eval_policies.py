@@ -13,7 +13,6 @@ from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
 from robofollow.eval.chance import references
 from robofollow.eval.episode import run_episode
-from robofollow.sim import CHUNK, MAX_STEPS
 from robofollow.eval.policy import BadActionError, validate_actions
 from robofollow.eval.reference import (
     REFERENCE_POLICIES,
@@ -21,7 +20,7 @@ from robofollow.eval.reference import (
     available_behaviours,
     understood,
 )
-from robofollow.sim import robot
+from robofollow.sim import CHUNK, MAX_STEPS, robot
 from tests.sim_helpers import benchmark, episode
 
 

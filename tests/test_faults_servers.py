@@ -26,8 +26,7 @@ from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import connect
 from websockets.sync.server import serve
 
-from robofollow.cli import main
-from robofollow.cli import parser as build_parser
+from robofollow.cli import main, parser
 from robofollow.eval.episode import run_episode
 from robofollow.eval.limits import IDLE_TIMEOUT_S, MAX_CLIENTS, MAX_MESSAGE_BYTES
 from robofollow.eval.loading import PolicyLoadError, load_policy
@@ -525,7 +524,7 @@ def _outside_address() -> str | None:
 
 
 def test_serve_defaults_to_listening_on_this_machine_only(capsys):
-    assert build_parser().parse_args(["serve", "--policy", "noop"]).host == "127.0.0.1"
+    assert parser().parse_args(["serve", "--policy", "noop"]).host == "127.0.0.1"
     with pytest.raises(SystemExit):
         main(["serve", "--help"])
     help_text = " ".join(capsys.readouterr().out.split())

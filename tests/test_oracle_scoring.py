@@ -22,8 +22,8 @@ from robofollow.resources import builtin_specs
 from robofollow.scoring import RecordingMismatchError, score_recording
 from robofollow.sim.rollout import run_expert
 from robofollow.trajectory import Trajectory, TrajectoryError
-from tests.sim_helpers import benchmark, episode
 from tests.cli_helpers import run
+from tests.sim_helpers import benchmark, episode
 
 PLACE = "scene1/L0/place_yellow_block_1_behind_red_cylinder#r1"  # right arm
 FRAME_ARRAYS = ("time", "state", "action", "positions", "quaternions", "ee_positions",

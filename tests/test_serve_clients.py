@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 from websockets.sync.client import connect
 
+from robofollow.eval.serving import ServerLimits
 from robofollow.eval.tcp_client import TcpPolicy
 from robofollow.eval.tcp_server import TcpPolicyServer
 from robofollow.eval.websocket_client import WebsocketPolicy
 from robofollow.eval.websocket_server import PolicyServer
-from robofollow.eval.serving import ServerLimits
 from robofollow.eval.wire import packb, unpackb
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES, IMAGE_HEIGHT, IMAGE_WIDTH

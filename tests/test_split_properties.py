@@ -9,6 +9,7 @@ from pathlib import Path
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
+from robofollow.audit.splits import FINDING_KEYS, findings, leakage
 from robofollow.build.pipeline import compile_specs
 from robofollow.compiler.behaviour import Step
 from robofollow.compiler.motions import Repertoire
@@ -17,7 +18,6 @@ from robofollow.compiler.routes import ROUTE_BAND, degenerate_routes
 from robofollow.compiler.spec import Body, Layout, Placed, Scene
 from robofollow.compiler.world import World
 from robofollow.errors import SpecErrors
-from robofollow.audit.splits import FINDING_KEYS, findings, leakage
 from tests.strategies import rich_specs, route_geometry, small_specs
 
 HEAVY = settings(max_examples=25, deadline=None,

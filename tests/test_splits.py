@@ -5,10 +5,10 @@ from pathlib import Path
 import pytest
 
 from robofollow.compiler import lf
-from robofollow.compiler.parser import parse
-from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
+from robofollow.compiler.parser import parse
 from robofollow.compiler.routes import passes_over
+from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.splits import episode_seed, generate
 from robofollow.compiler.training import check_training
 from robofollow.compiler.wordings import concepts

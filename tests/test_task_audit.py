@@ -8,9 +8,6 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.build.pipeline import compile_specs
-from robofollow.cli import main
-from robofollow.errors import RoboFollowError
 from robofollow.audit.task_list import (
     FINDING_KINDS,
     ListedTask,
@@ -18,6 +15,9 @@ from robofollow.audit.task_list import (
     read_task_list,
     task_list,
 )
+from robofollow.build.pipeline import compile_specs
+from robofollow.cli import main
+from robofollow.errors import RoboFollowError
 from robofollow.resources import builtin_specs
 from tests.sim_helpers import benchmark
 

@@ -7,11 +7,11 @@ from __future__ import annotations
 import shutil
 from pathlib import Path
 
+from robofollow.audit.splits import findings
 from robofollow.build.pipeline import compile_specs
 from robofollow.build.rounds import all_episodes
 from robofollow.build.summary import summary
 from robofollow.eval.verify import run_expert_episodes
-from robofollow.audit.splits import findings
 from robofollow.resources import builtin_specs
 
 README = Path(__file__).resolve().parent.parent / "README.md"

@@ -20,6 +20,12 @@ from __future__ import annotations
 
 import re
 
+from robofollow.audit.entropy import (
+    behaviour_entropy_bits,
+    entropy_bits,
+    same_behaviours,
+    scene_groups,
+)
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.feasibility import infeasible
@@ -32,8 +38,6 @@ from robofollow.compiler.spec import Spec
 from robofollow.compiler.split_report import rule_report
 from robofollow.compiler.splits import Splits
 from robofollow.compiler.world import World, jitter_worlds
-from robofollow.audit.entropy import (behaviour_entropy_bits, entropy_bits, same_behaviours,
-                                       scene_groups)
 
 
 def _identifiers(spec: Spec) -> set[str]:

@@ -28,10 +28,11 @@ from dataclasses import dataclass
 
 from pydantic import ValidationError
 
+from robofollow.audit.splits import SeenTasks, TrainingFacts
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour, describe
-from robofollow.compiler.grounding import Grounder, GroundingError, Unstable, first_unstable
 from robofollow.compiler.feasibility import infeasible
+from robofollow.compiler.grounding import Grounder, GroundingError, Unstable, first_unstable
 from robofollow.compiler.model import Model
 from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
 from robofollow.compiler.parser import parse
@@ -42,7 +43,6 @@ from robofollow.compiler.splits import TestTask
 from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
 from robofollow.errors import InstructionError, RoboFollowError, SpecError
 from robofollow.files import json_lines
-from robofollow.audit.splits import SeenTasks, TrainingFacts
 
 FINDING_KINDS = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "route",
                  "infeasible", "repertoire", "duplicate", "leakage", "level")

@@ -34,6 +34,12 @@ class Compiled:
     def __post_init__(self):
         object.__setattr__(self, "training", MappingProxyType(dict(self.training)))
 
+    @classmethod
+    def of(cls, spec: Spec, splits: Splits, training: Mapping[str, Behaviour],
+           report: dict) -> Compiled:
+        """A compiled benchmark from its parts, the audit as audit.json holds it."""
+        return cls(spec, splits, training, json.dumps(report, indent=1, sort_keys=True) + "\n")
+
     def __reduce__(self):  # (a read-only mapping does not pickle; worker processes get copies)
         return Compiled, (self.spec, self.splits, dict(self.training), self.audit_json)
 
@@ -86,8 +92,7 @@ def _compile(specs: Path | list[Path]) -> Compiled:
         raise SpecErrors(errors)
     splits = generate(spec, training)
     splits = splits.model_copy(update={"tasks": splits.tasks + listed})
-    report = json.dumps(audit(spec, training, splits), indent=1, sort_keys=True) + "\n"
-    return Compiled(spec, splits, training, report)
+    return Compiled.of(spec, splits, training, audit(spec, training, splits))
 
 
 def clean(compiled: Compiled) -> bool:

@@ -84,10 +84,10 @@ def add_audit(commands) -> None:
 
 
 def cmd_audit(args) -> int:
+    from robofollow.audit.task_list import audit_task_list, read_task_list, task_list
     from robofollow.build.pipeline import clean, compile_specs
     from robofollow.build.summary import summary
     from robofollow.files import write_jsonl
-    from robofollow.audit.task_list import audit_task_list, read_task_list, task_list
 
     compiled = compile_specs(specs_of(args))
     if args.export_tasks:

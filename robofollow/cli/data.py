@@ -9,7 +9,7 @@ import sys
 from pathlib import Path
 
 from robofollow.cli.common import image_size, interrupted, positive, specs_argument, specs_of
-from robofollow.data.jobs import FORMATS, DEMO_INSTRUCTIONS
+from robofollow.data.jobs import DEMO_INSTRUCTIONS, FORMATS
 from robofollow.errors import RoboFollowError
 
 

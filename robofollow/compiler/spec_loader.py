@@ -37,6 +37,7 @@ from robofollow.compiler.spec import (
     MAX_SEED,
     MAX_TASKS,
     RGB_RANGE,
+    TABLE_HEIGHT,
     TABLE_HEIGHT_RANGE,
     YAW_RANGE,
     Body,
@@ -82,7 +83,7 @@ _SIZES = {
 }
 _COMMON = ("color", "rgb")
 _PHYSICS = ("mass", "friction")
-_SETTINGS = {"table_height": 0.74}
+_SETTINGS = {"table_height": TABLE_HEIGHT}
 _SETTING_RANGES = {"table_height": (TABLE_HEIGHT_RANGE, " m")}
 _SPLIT_NUMBERS = {  # attribute -> (SplitRule field, range)
     "max": ("max_tasks", (1, MAX_TASKS)), "rounds": ("rounds", (1, MAX_ROUNDS)),

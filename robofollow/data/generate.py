@@ -21,10 +21,10 @@ from tqdm import tqdm
 
 from robofollow.build.pipeline import Compiled
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
-from robofollow.files import changed_options, write_json_atomic
 from robofollow.data.jobs import DemoJob, demo_jobs
 from robofollow.data.units import Options, UnitRecorder, unit_path
 from robofollow.errors import RoboFollowError
+from robofollow.files import changed_options, write_json_atomic
 from robofollow.workers import results
 
 WRITERS = {"lerobot-v2.1": lerobot_v21.write, "lerobot-v3.0": lerobot_v30.write,

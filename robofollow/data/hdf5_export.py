@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from robofollow.files import link_or_copy, write_json, write_jsonl
 from robofollow.data.units import ROBOT_TYPE
+from robofollow.files import link_or_copy, write_json, write_jsonl
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
 from robofollow.sim.simulation import CONTROL_HZ

@@ -8,8 +8,8 @@ from pathlib import Path
 import pyarrow.parquet as pq
 
 from robofollow.data import lerobot
-from robofollow.files import link_or_copy, write_json, write_jsonl
 from robofollow.data.lerobot import CHUNKS_SIZE, VIDEO_KEYS
+from robofollow.files import link_or_copy, write_json, write_jsonl
 
 VERSION = "v2.1"
 DATA_PATH = "data/chunk-{episode_chunk:03d}/episode_{episode_index:06d}.parquet"

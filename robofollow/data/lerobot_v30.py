@@ -10,9 +10,9 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from robofollow.data import lerobot
-from robofollow.files import write_json
 from robofollow.data.lerobot import CHUNKS_SIZE, FPS, VIDEO_KEYS, Episode
 from robofollow.data.stats import aggregate
+from robofollow.files import write_json
 from robofollow.sim.video import concatenate
 
 VERSION = "v3.0"

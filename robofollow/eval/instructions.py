@@ -15,7 +15,6 @@ from robofollow.errors import RoboFollowError
 from robofollow.eval.modes import INSTRUCTION_MODES
 
 
-
 def given_instruction(compiled: Compiled, episode: Episode, mode: str) -> str:
     if mode == "normal":
         return episode.instruction

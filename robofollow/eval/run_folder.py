@@ -13,8 +13,8 @@ from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-from robofollow.files import changed_options, json_line, json_lines, write_json_atomic
 from robofollow.errors import RoboFollowError
+from robofollow.files import changed_options, json_line, json_lines, write_json_atomic
 
 RUN_FILE, RESULTS, SUMMARY, LOCK = "run.json", "episodes.jsonl", "summary.json", ".lock"
 DROPPED = RESULTS + ".dropped"  # corrupt lines that --drop-corrupt moved out of RESULTS

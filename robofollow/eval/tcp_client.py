@@ -7,6 +7,7 @@ import socket
 
 import numpy as np
 
+from robofollow.eval.limits import CALL_TIMEOUT_S, MAX_MESSAGE_BYTES
 from robofollow.eval.policy import (
     PolicyConnectionError,
     PolicyServerError,
@@ -15,7 +16,6 @@ from robofollow.eval.policy import (
     server_text,
 )
 from robofollow.eval.tcp_protocol import CAMERAS, receive_message, send_message
-from robofollow.eval.limits import CALL_TIMEOUT_S, MAX_MESSAGE_BYTES
 from robofollow.eval.wire import MessageTooBig, WireError
 
 UPSTREAM_USES = frozenset({"state", "instruction", "images"})

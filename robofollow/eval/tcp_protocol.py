@@ -28,8 +28,8 @@ import time
 
 import numpy as np
 
-from robofollow.eval.policy import server_text
 from robofollow.eval.limits import MAX_MESSAGE_BYTES
+from robofollow.eval.policy import server_text
 from robofollow.eval.wire import (
     MessageTooBig,
     WireError,

@@ -16,8 +16,8 @@ import threading
 import time
 
 from robofollow.build.pipeline import Compiled
-from robofollow.eval.policy import server_text
 from robofollow.eval.limits import DEFAULT_HOST
+from robofollow.eval.policy import server_text
 from robofollow.eval.serving import (
     PolicyPool,
     RequestError,

@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 
-from robofollow.files import write_json_atomic
 from robofollow.errors import RoboFollowError
+from robofollow.files import write_json_atomic
 from robofollow.learn.model import Architecture
 
 FORMAT = "robofollow-baseline/1"

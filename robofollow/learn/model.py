@@ -19,6 +19,7 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from robofollow.learn.tokens import MAX_TOKENS
+from robofollow.sim import CHUNK
 
 ACTION_WIDTH = 14
 
@@ -29,7 +30,7 @@ class Architecture:
     cameras: tuple[str, ...]
     image_shape: tuple[int, int]  # (height, width) after shrinking
     vocab_size: int
-    chunk: int = 50
+    chunk: int = CHUNK
     channels: tuple[int, ...] = (32, 64, 64)
     kernels: tuple[int, ...] = (5, 3, 3)
     strides: tuple[int, ...] = (2, 2, 1)

@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 
 from robofollow.errors import RoboFollowError
+from robofollow.sim import CHUNK
 
 KINDS = ("text", "blind", "form")  # what the network reads of the instruction (tokens.py)
 
@@ -25,7 +26,7 @@ class TrainOptions:
     cameras: tuple[str, ...] = ("cam_high",)
     factor: int = 4  # 320 x 240 frames become 80 x 60
     shift: int = 4  # pixels of random-shift augmentation
-    chunk: int = 50
+    chunk: int = CHUNK  # actions predicted per query (what the harness runs of each)
     execute: int = 25
     val_fraction: float = 0.05
     checkpoint_every: int = 1000

@@ -16,7 +16,7 @@ import numpy as np
 
 from robofollow.compiler import workspace
 from robofollow.compiler.layouts import BOWL_FLOOR
-from robofollow.compiler.spec import Body, Scene
+from robofollow.compiler.spec import TABLE_HEIGHT, Body, Scene
 from robofollow.sim import robot
 from robofollow.sim.assets import ARM_MESHES, mesh_dir
 
@@ -36,8 +36,9 @@ class CameraSpec:
 
 
 CAMERAS = (
-    CameraSpec("cam_high", (0.0, -0.52, 1.28), (0.0, -0.06, 0.74), 48.0),
-    CameraSpec("cam_top", (0.0, -0.10, 1.60), (0.0, -0.10, 0.74), 0.62, orthographic=True),
+    CameraSpec("cam_high", (0.0, -0.52, 1.28), (0.0, -0.06, TABLE_HEIGHT), 48.0),
+    CameraSpec("cam_top", (0.0, -0.10, 1.60), (0.0, -0.10, TABLE_HEIGHT), 0.62,
+               orthographic=True),
 )
 WRIST_FOVY = 75.0  # deg
 

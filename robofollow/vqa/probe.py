@@ -22,8 +22,8 @@ from PIL import Image
 from tqdm import tqdm
 
 from robofollow.build.pipeline import Compiled
-from robofollow.files import write_json, write_jsonl
 from robofollow.errors import RoboFollowError
+from robofollow.files import write_json, write_jsonl
 from robofollow.sim.stage import Stage
 from robofollow.vqa import paper
 from robofollow.vqa.questions import Question, questions

@@ -1,0 +1,50 @@
+"""What an episode is: a compiled test task's round, fully determined by (spec digest, task,
+level, layout, round, seed), with a hash over all of that. `EpisodeSetup` is the part a
+simulation and the scorer read (where the episode starts and what it asks); an `Episode` is a
+compiled test episode, as the build writes it to `episodes/*.jsonl`. This module stays light:
+an env reads episodes without loading the compiler's passes."""
+
+from __future__ import annotations
+
+from pydantic import ConfigDict, Field
+
+from robofollow.compiler import lf
+from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.model import Model
+from robofollow.compiler.spec import Level
+from robofollow.files import json_line
+
+
+class EpisodeSetup(Model):
+    """Where an episode starts and what it asks for: its id, the scene's layout, the jitter
+    seed and the grounded behaviour."""
+
+    model_config = ConfigDict(validate_by_name=True, validate_by_alias=True,
+                              serialize_by_alias=True)
+
+    id: str = Field(alias="episode")  # `<scene>/<level>/<task>#r<round>` for a test episode
+    scene: str
+    layout: str
+    seed: int
+    behaviour: Behaviour
+
+    def meta(self) -> dict:
+        """What a recording of it carries: the id, the scene, the layout and the seed."""
+        return {"episode": self.id, "scene": self.scene, "layout": self.layout,
+                "seed": self.seed}
+
+
+class Episode(EpisodeSetup):
+    """A compiled test episode: its task, level and round, the instruction a policy is given
+    and its logical form, and a hash over the spec digest and all of these."""
+
+    task: str
+    level: Level
+    instruction: str
+    lf: lf.Instruction
+    round: int
+    hash: str
+
+    def line(self) -> str:
+        """The episode as one JSON Lines record (sorted keys), as the build writes it."""
+        return json_line(self.model_dump(mode="json"), sort_keys=True)

@@ -1,0 +1,66 @@
+"""The build in words, for people: summary.txt and what changed against a previous build."""
+
+from __future__ import annotations
+
+from robofollow.audit.splits import FINDING_KEYS
+from robofollow.build.pipeline import Compiled
+from robofollow.compiler.spec import LEVELS
+
+
+def summary(compiled: Compiled, changes: str = "") -> str:
+    report, spec = compiled.report, compiled.spec
+    lines = [f"RoboFollow: {len(spec.scenes)} scenes, {len(spec.tasks)} training tasks, "
+             f"spec digest {spec.digest[:12]}",
+             f"scene entropy H(T|S) = {report['scene_entropy_bits']:.3f} bits over "
+             f"{len(report['groups'])} training scene groups (task labels, as the paper counts); "
+             f"over distinct behaviours H(B|S) = {report['behaviour_entropy_bits']:.3f} bits",
+             "", "test tasks per scene and level (each run for the split's rounds):",
+             "          " + "".join(f"{level:>6}" for level in LEVELS)]
+    for scene, counts in report["counts"].items():
+        lines.append(f"{scene:<10}" + "".join(f"{counts[level]:>6}" for level in LEVELS))
+    lines += _rules_text(report["split_rules"])
+    same = report["same_behaviour"]
+    lines += ["", f"training tasks with the same behaviour on one layout: {len(same) or 'none'}"]
+    lines += [f"  {item['layout']}: {', '.join(item['tasks'])}" for item in same]
+    lines += ["", f"rejected candidates: {report['rejected']} (rejected.jsonl says why)"]
+    for key in FINDING_KEYS:
+        title = key.replace("_", " ")
+        items = report[key]
+        lines.append(f"{title}: {len(items) or 'none'}")
+        lines += [f"  {item['task']}: {item['finding']}" for item in items[:20]]
+    return "\n".join(lines) + "\n" + changes
+
+
+def _rules_text(rules: dict) -> list[str]:
+    """Tasks per layout, what each cap dropped and the rules' warnings, for people."""
+    lines = ["", "test tasks per layout:"]
+    for scene, levels in rules["layouts"].items():
+        lines.append(f"  {scene:<12}" + "".join(f"{level:>6}" for level in LEVELS))
+        for layout in dict.fromkeys(name for level in LEVELS for name in levels.get(level, {})):
+            lines.append(f"    {layout:<10}" + "".join(
+                f"{levels.get(level, {}).get(layout, '.'):>6}" for level in LEVELS))
+    lines.append(f"caps: {'none applied' if not rules['capped'] else ''}".rstrip())
+    lines += [f"  {c['scene']} {c['level']}: {c['kept']} kept (max {c['max']}), {c['dropped']} "
+              "dropped ("
+              + ", ".join(f"{layout} {n}" for layout, n in c["dropped_by_layout"].items()) + ")"
+              for c in rules["capped"]]
+    lines.append(f"split rule warnings: {len(rules['warnings']) or 'none'}")
+    lines += [f"  {warning}" for warning in rules["warnings"]]
+    return lines
+
+
+def changes(before: set[str], compiled: Compiled, shown: int = 20) -> str:
+    """Which test tasks a build adds and removes against the ids of a previous one."""
+    if not before:
+        return ""
+    after = {t.id for t in compiled.splits.tasks}
+    added, removed = sorted(after - before), sorted(before - after)
+    if not added and not removed:
+        return "\nagainst the previous build: the same test tasks\n"
+    lines = ["", f"against the previous build: {len(added)} test tasks added, {len(removed)} "
+                 "removed"]
+    lines += [f"  + {task}" for task in added[:shown]]
+    lines += [f"  - {task}" for task in removed[:shown]]
+    if max(len(added), len(removed)) > shown:
+        lines.append(f"  (the first {shown} of each)")
+    return "\n".join(lines) + "\n"
