@@ -28,6 +28,7 @@ from pathlib import Path
 from robofollow.build.episode import Episode
 from robofollow.compiler.spec import LEVELS, Spec
 from robofollow.compiler.spec_files import spec_files
+from robofollow.files import json_line
 
 FORMAT = 1  # bump when the file layout or the records' meaning changes
 KEEP = 8  # cache files kept (the newest); older ones are removed when one is written
@@ -155,7 +156,8 @@ def _compile(specs: Path, digest: str) -> bytes:
     compiled = compile_specs(specs)
     records = all_episodes(compiled)
     body = (compiled.spec.model_dump_json() + "\n"
-            + "".join(episode.line() for episode in records)).encode()
+            + "".join(json_line(episode.model_dump(mode="json"), sort_keys=True)
+                      for episode in records)).encode()
     header = {"format": FORMAT, "key": digest, "sha256": hashlib.sha256(body).hexdigest(),
               "ids": [episode.id for episode in records]}
     return json.dumps(header).encode() + b"\n" + body

@@ -106,7 +106,7 @@ def test_vla_eval_runs_robofollow_episodes_scored_as_robofollow_eval_scores_them
 
     seen = server.seen[0]
     assert set(seen) == {"images", "state", "task_description"}
-    assert seen["task_description"] == first["instruction"] and seen["state"].shape == (14,)
+    assert seen["task_description"] == first.instruction and seen["state"].shape == (14,)
     assert {k: v.shape for k, v in seen["images"].items()} == {
         name: (48, 64, 3) for name in ("cam_high", "cam_left_wrist", "cam_right_wrist")}
     assert len(server.seen) == 3 + BUDGET

@@ -12,7 +12,6 @@ from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.model import Model
 from robofollow.compiler.spec import Level
-from robofollow.files import json_line
 
 
 class EpisodeSetup(Model):
@@ -44,7 +43,3 @@ class Episode(EpisodeSetup):
     lf: lf.Instruction
     round: int
     hash: str
-
-    def line(self) -> str:
-        """The episode as one JSON Lines record (sorted keys), as the build writes it."""
-        return json_line(self.model_dump(mode="json"), sort_keys=True)

@@ -21,8 +21,8 @@ import secrets
 import shutil
 from pathlib import Path
 
-from robofollow.build.rounds import episodes
 from robofollow.build.pipeline import Compiled
+from robofollow.build.rounds import episodes
 from robofollow.build.summary import changes, summary
 from robofollow.compiler.goals import goal_graph, graph_to_dict
 from robofollow.compiler.plans import plan
@@ -217,7 +217,8 @@ def _write_files(compiled: Compiled, out: Path, changed: str) -> None:
             tasks = compiled.splits.of(scene, level)
             with open(out / "episodes" / f"{scene}_{level}.jsonl", "w", encoding="utf-8") as f:
                 for task in tasks:
-                    f.writelines(episode.line() for episode in episodes(compiled, task))
+                    f.writelines(_line(episode.model_dump(mode="json"))
+                                 for episode in episodes(compiled, task))
             with open(out / "tasks" / f"{scene}_{level}.jsonl", "w", encoding="utf-8") as f:
                 for task in tasks:
                     world = World(compiled.spec.scenes[scene], task.layout)
