@@ -151,15 +151,15 @@ def _load(specs: Path, digest: str, folder: Path | None) -> Episodes:
 def _compile(specs: Path, digest: str) -> bytes:
     """The cache file's bytes for `specs`, compiled."""
     from robofollow.build.pipeline import compile_specs  # (seconds: only on a miss)
-    from robofollow.build.rounds import all_episodes
+    from robofollow.build.rounds import episode_records, ordered_tasks
 
     compiled = compile_specs(specs)
-    records = all_episodes(compiled)
+    records = [record for task in ordered_tasks(compiled)
+               for record in episode_records(compiled, task)]
     body = (compiled.spec.model_dump_json() + "\n"
-            + "".join(json_line(episode.model_dump(mode="json"), sort_keys=True)
-                      for episode in records)).encode()
+            + "".join(json_line(record, sort_keys=True) for record in records)).encode()
     header = {"format": FORMAT, "key": digest, "sha256": hashlib.sha256(body).hexdigest(),
-              "ids": [episode.id for episode in records]}
+              "ids": [record["episode"] for record in records]}
     return json.dumps(header).encode() + b"\n" + body
 
 

@@ -22,7 +22,7 @@ import shutil
 from pathlib import Path
 
 from robofollow.build.pipeline import Compiled
-from robofollow.build.rounds import episodes
+from robofollow.build.rounds import episode_records
 from robofollow.build.summary import changes, summary
 from robofollow.compiler.goals import goal_graph, graph_to_dict
 from robofollow.compiler.plans import plan
@@ -217,8 +217,7 @@ def _write_files(compiled: Compiled, out: Path, changed: str) -> None:
             tasks = compiled.splits.of(scene, level)
             with open(out / "episodes" / f"{scene}_{level}.jsonl", "w", encoding="utf-8") as f:
                 for task in tasks:
-                    f.writelines(_line(episode.model_dump(mode="json"))
-                                 for episode in episodes(compiled, task))
+                    f.writelines(_line(record) for record in episode_records(compiled, task))
             with open(out / "tasks" / f"{scene}_{level}.jsonl", "w", encoding="utf-8") as f:
                 for task in tasks:
                     world = World(compiled.spec.scenes[scene], task.layout)

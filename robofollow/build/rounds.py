@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import difflib
 import hashlib
+from collections.abc import Iterator
 
 from robofollow.build.episode import Episode
 from robofollow.build.pipeline import Compiled
@@ -14,27 +15,44 @@ from robofollow.errors import RoboFollowError
 from robofollow.files import json_line
 
 
-def episodes(compiled: Compiled, task: TestTask) -> list[Episode]:
-    """The task's episodes, one per round of its level's split rule."""
+def _rounds(compiled: Compiled, task: TestTask) -> Iterator[tuple[Episode, dict]]:
+    """Each round of the task's level's split rule: the episode, and its record as the build
+    writes it (the hash covers the spec digest and the rest of the record)."""
     rule = compiled.spec.scenes[task.scene].splits.get(task.level) or SplitRule(level=task.level)
-    records = []
+    first = Episode(id=f"{task.id}#r1", task=task.id, scene=task.scene, level=task.level,
+                    layout=task.layout, instruction=task.instruction, lf=task.form,
+                    behaviour=task.behaviour, round=1, seed=0, hash="")
+    common = first.model_dump(mode="json", exclude={"hash"})  # (the rounds differ in 3 fields)
     for round_index in range(1, rule.rounds + 1):
-        fields = {"episode": f"{task.id}#r{round_index}", "task": task.id, "scene": task.scene,
-                  "level": task.level, "layout": task.layout, "instruction": task.instruction,
-                  "lf": task.form, "behaviour": task.behaviour, "round": round_index,
-                  "seed": episode_seed(task.id, round_index, rule.seed)}
-        unhashed = Episode(**fields, hash="")
-        content = compiled.spec.digest + json_line(
-            unhashed.model_dump(mode="json", exclude={"hash"}), sort_keys=True)
-        digest = hashlib.sha256(content.encode()).hexdigest()[:16]
-        records.append(unhashed.model_copy(update={"hash": digest}))
-    return records
+        varying = {"episode": f"{task.id}#r{round_index}", "round": round_index,
+                   "seed": episode_seed(task.id, round_index, rule.seed)}
+        record = {**common, **varying}
+        content = compiled.spec.digest + json_line(record, sort_keys=True)
+        record["hash"] = hashlib.sha256(content.encode()).hexdigest()[:16]
+        yield first.model_copy(update={"id": varying["episode"], "round": round_index,
+                                       "seed": varying["seed"], "hash": record["hash"]}), record
+
+
+def episodes(compiled: Compiled, task: TestTask) -> list[Episode]:
+    """The task's episodes, one per round."""
+    return [episode for episode, _ in _rounds(compiled, task)]
+
+
+def episode_records(compiled: Compiled, task: TestTask) -> list[dict]:
+    """The task's episodes as JSON records, as the build writes them."""
+    return [record for _, record in _rounds(compiled, task)]
+
+
+def ordered_tasks(compiled: Compiled) -> Iterator[TestTask]:
+    """Every test task, in scene, level and task order."""
+    for scene in compiled.spec.scenes:
+        for level in LEVELS:
+            yield from compiled.splits.of(scene, level)
 
 
 def all_episodes(compiled: Compiled) -> list[Episode]:
     """Every episode of every level, in scene, level and task order."""
-    return [episode for scene in compiled.spec.scenes for level in LEVELS
-            for task in compiled.splits.of(scene, level) for episode in episodes(compiled, task)]
+    return [episode for task in ordered_tasks(compiled) for episode in episodes(compiled, task)]
 
 
 class UnknownEpisodeError(RoboFollowError):
