@@ -16,8 +16,8 @@ import time
 from pathlib import Path
 
 from robofollow.audit.splits import audit
-from robofollow.build.output import write
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.output import write
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler import parser
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.splits import generate

@@ -31,8 +31,8 @@ from pathlib import Path
 import numpy as np
 
 import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
-from robofollow.build.pipeline import compile_specs
-from robofollow.build.rounds import all_episodes
+from robofollow.benchmark.pipeline import compile_specs
+from robofollow.benchmark.rounds import all_episodes
 from robofollow.eval.reference import ExpertPolicy
 from robofollow.eval.runner import EvalOptions, evaluate, read_results
 from robofollow.resources import builtin_specs

@@ -17,8 +17,8 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-from robofollow.build.pipeline import compile_specs
-from robofollow.build.rounds import all_episodes
+from robofollow.benchmark.pipeline import compile_specs
+from robofollow.benchmark.rounds import all_episodes
 from robofollow.compiler.spec import LEVELS
 from robofollow.eval.verify import run_expert_episodes
 

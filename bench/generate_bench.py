@@ -31,7 +31,7 @@ import numpy as np
 import pyarrow.parquet as pq
 
 import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
-from robofollow.build.pipeline import compile_specs
+from robofollow.benchmark.pipeline import compile_specs
 from robofollow.data.generate import generate
 from robofollow.data.jobs import demo_jobs
 from robofollow.data.units import Options

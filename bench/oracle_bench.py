@@ -18,8 +18,8 @@ from functools import partial
 from pathlib import Path
 
 import robofollow  # noqa: F401  (before MuJoCo: headless GL default)
-from robofollow.build.pipeline import compile_specs
-from robofollow.build.rounds import find_episode
+from robofollow.benchmark.pipeline import compile_specs
+from robofollow.benchmark.rounds import find_episode
 from robofollow.oracle.score import score
 from robofollow.sim.rollout import run_expert
 

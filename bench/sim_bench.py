@@ -22,8 +22,8 @@ import mujoco
 import numpy as np
 
 import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
-from robofollow.build.episode import Episode
-from robofollow.build.pipeline import compile_specs
+from robofollow.benchmark.episode import Episode
+from robofollow.benchmark.pipeline import compile_specs
 from robofollow.resources import builtin_specs
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
@@ -32,7 +32,7 @@ from robofollow.sim.simulation import SUBSTEPS, Simulation
 
 
 def _episode_of(scene: str, layout: str) -> Episode:
-    from robofollow.build.rounds import all_episodes
+    from robofollow.benchmark.rounds import all_episodes
 
     return next(e for e in all_episodes(compile_specs(builtin_specs()))
                 if e.scene == scene and e.layout == layout)

@@ -25,7 +25,7 @@ from functools import cache, cached_property, lru_cache
 from importlib import metadata
 from pathlib import Path
 
-from robofollow.build.episode import Episode
+from robofollow.benchmark.episode import Episode
 from robofollow.compiler.spec import LEVELS, Spec
 from robofollow.compiler.spec_files import spec_files
 from robofollow.files import json_line
@@ -35,13 +35,14 @@ KEEP = 8  # cache files kept (the newest); older ones are removed when one is wr
 # the code the compile runs, under robofollow/ (a test checks that these are the modules the
 # cached compile imports, and beside them only the rest of the compiler): a change to it, and
 # only to it, compiles again
-SOURCES = ("build/__init__.py", "build/episode.py", "build/pipeline.py", "build/rounds.py",
-           "compiled_cache.py", "errors.py", "resources.py", "files.py", "compiler", "audit")
+SOURCES = ("benchmark/__init__.py", "benchmark/episode.py", "benchmark/pipeline.py",
+           "benchmark/rounds.py", "compiled_cache.py", "errors.py", "resources.py", "files.py",
+           "compiler", "audit")
 
 
 @dataclass(frozen=True)
 class Episodes:
-    """The spec and every episode (in `build.rounds.all_episodes` order), each parsed when asked
+    """The spec and every episode (in `benchmark.rounds.all_episodes` order), each parsed when asked
     for (a fresh object every time)."""
 
     spec: Spec
@@ -70,7 +71,7 @@ class Episodes:
 
 
 def _unknown(episode_id: str, ids: tuple[str, ...]) -> Exception:
-    from robofollow.build.rounds import unknown_episode  # (imports the compiler: only on error)
+    from robofollow.benchmark.rounds import unknown_episode  # (imports the compiler: only on error)
 
     return unknown_episode(episode_id, list(dict.fromkeys(e.partition("#")[0] for e in ids)))
 
@@ -150,8 +151,8 @@ def _load(specs: Path, digest: str, folder: Path | None) -> Episodes:
 
 def _compile(specs: Path, digest: str) -> bytes:
     """The cache file's bytes for `specs`, compiled."""
-    from robofollow.build.pipeline import compile_specs  # (seconds: only on a miss)
-    from robofollow.build.rounds import episode_records, ordered_tasks
+    from robofollow.benchmark.pipeline import compile_specs  # (seconds: only on a miss)
+    from robofollow.benchmark.rounds import episode_records, ordered_tasks
 
     compiled = compile_specs(specs)
     records = [record for task in ordered_tasks(compiled)

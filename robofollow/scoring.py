@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import dataclasses
 
-from robofollow.build.episode import EpisodeSetup
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.episode import EpisodeSetup
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
 from robofollow.errors import RoboFollowError
 from robofollow.oracle.results import EpisodeScore

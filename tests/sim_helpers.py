@@ -8,9 +8,9 @@ import sys
 from contextlib import contextmanager
 from functools import lru_cache
 
-from robofollow.build.episode import Episode
-from robofollow.build.pipeline import Compiled, compile_specs
-from robofollow.build.rounds import all_episodes
+from robofollow.benchmark.episode import Episode
+from robofollow.benchmark.pipeline import Compiled, compile_specs
+from robofollow.benchmark.rounds import all_episodes
 from robofollow.resources import builtin_specs
 
 

@@ -12,7 +12,7 @@ from functools import cache
 import numpy as np
 import pytest
 
-from robofollow.build.rounds import all_episodes
+from robofollow.benchmark.rounds import all_episodes
 from robofollow.eval.chance import references
 from robofollow.scoring import score_recording
 from tests.judged import Script

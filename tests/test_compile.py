@@ -9,7 +9,7 @@ import pytest
 from robofollow import cli
 from robofollow.audit.splits import findings
 from robofollow.audit.task_list import ListedTask, audit_task_list, task_list
-from robofollow.build.pipeline import compile_specs
+from robofollow.benchmark.pipeline import compile_specs
 from robofollow.resources import builtin_specs
 from tests.spec_helpers import edit
 
@@ -83,7 +83,7 @@ def test_bad_specs_are_reported_with_positions_and_exit_1(tmp_path, capsys):
 
 def test_injected_leaks_are_caught():
     from robofollow.audit.splits import leakage
-    from robofollow.build.pipeline import compile_specs
+    from robofollow.benchmark.pipeline import compile_specs
 
     compiled = compile_specs(SPECS)
     spec, splits = compiled.spec, compiled.splits

@@ -16,7 +16,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from robofollow.build.rounds import find_episode
+from robofollow.benchmark.rounds import find_episode
 from robofollow.cli import main
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.data.check import check

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
-from robofollow.build.rounds import UnknownEpisodeError
+from robofollow.benchmark.rounds import UnknownEpisodeError
 from robofollow.compiler.plans import plan
 from robofollow.oracle.score import score
 from robofollow.sim import robot
@@ -59,7 +59,7 @@ def test_the_episode_sets_instruction_and_seed(env):
 
 
 def _episodes():
-    from robofollow.build.rounds import all_episodes
+    from robofollow.benchmark.rounds import all_episodes
 
     return all_episodes(benchmark())
 

@@ -172,7 +172,7 @@ def test_a_policy_that_dies_or_exits_costs_its_episode_not_the_run(tmp_path, wor
 
 
 def test_in_process_a_systemexit_is_recorded_and_ctrl_c_still_stops(tmp_path, monkeypatch):
-    from robofollow.build.pipeline import compile_specs
+    from robofollow.benchmark.pipeline import compile_specs
     from robofollow.eval.runner import EvalOptions, evaluate, read_results
 
     compiled = compile_specs(SPECS)

@@ -20,7 +20,7 @@ from pathlib import Path
 import pytest
 
 from robofollow import cli
-from robofollow.build import output
+from robofollow.benchmark import output
 from robofollow.compiler.spec import MAX_BODIES, MAX_LAYOUTS, MAX_SPEC_BYTES, MAX_STACK
 from tests.spec_helpers import VALID
 

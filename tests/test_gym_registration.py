@@ -51,7 +51,7 @@ def _avoidable(caught: list[warnings.WarningMessage]) -> list[str]:
 def test_import_registers_the_ids_without_mujoco_or_the_compiler():
     code = ("import sys, robofollow, gymnasium; print(sorted(i for i in gymnasium.registry "
             "if i.startswith('RoboFollow'))); print('mujoco' in sys.modules, "
-            "'robofollow.build' in sys.modules)")
+            "'robofollow.benchmark' in sys.modules)")
     out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
                          text=True).stdout.splitlines()
     assert out == [str(sorted(env_ids())), "False False"]
@@ -184,7 +184,7 @@ def test_no_cache_writes_nothing(scene1, monkeypatch, tmp_path):
 
 
 def test_the_key_covers_every_module_the_compiler_runs():
-    code = ("import sys, json, robofollow.build; print(json.dumps(sorted(m.__file__ for name, m "
+    code = ("import sys, json, robofollow.benchmark; print(json.dumps(sorted(m.__file__ for name, m "
             "in list(sys.modules.items()) if name.startswith('robofollow'))))")
     out = subprocess.run([sys.executable, "-c", code], check=True, capture_output=True,
                          text=True).stdout
@@ -199,7 +199,7 @@ def test_the_key_covers_every_module_the_compiler_runs():
 def test_the_cache_key_covers_what_the_compile_imports_and_nothing_else():
     """A change to the compile's code compiles again; a change to scoring, the simulator or
     the harness does not (their modules are not in the key)."""
-    program = ("import sys, robofollow.build.pipeline, robofollow.build.rounds, "
+    program = ("import sys, robofollow.benchmark.pipeline, robofollow.benchmark.rounds, "
                "robofollow.compiled_cache; "
                "print('\\n'.join(sys.modules[m].__file__ for m in sys.modules "
                "if m.startswith('robofollow.') and not m.startswith('robofollow.sim')))")

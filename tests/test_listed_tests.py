@@ -6,8 +6,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from robofollow.build.pipeline import compile_specs
-from robofollow.build.rounds import all_episodes
+from robofollow.benchmark.pipeline import compile_specs
+from robofollow.benchmark.rounds import all_episodes
 from robofollow.cli import main
 from robofollow.resources import builtin_specs
 

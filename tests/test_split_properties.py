@@ -10,7 +10,7 @@ from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
 from robofollow.audit.splits import FINDING_KEYS, findings, leakage
-from robofollow.build.pipeline import compile_specs
+from robofollow.benchmark.pipeline import compile_specs
 from robofollow.compiler.behaviour import Step
 from robofollow.compiler.motions import Repertoire
 from robofollow.compiler.observation import same_observation

@@ -136,7 +136,7 @@ L3_RULE = "split L3 layouts=(scene1_1, scene1_2, scene1_3)"
 
 
 def test_a_rule_layout_that_yields_nothing_is_a_warning_with_the_reason(tmp_path):
-    from robofollow.build.pipeline import compile_specs
+    from robofollow.benchmark.pipeline import compile_specs
 
     folder = _scene1_with(tmp_path, L3_RULE, "layout scene1_4 from default { swap red_sphere "
                           "red_cylinder }\n    " + L3_RULE.replace(")", ", scene1_4)"))
@@ -146,7 +146,7 @@ def test_a_rule_layout_that_yields_nothing_is_a_warning_with_the_reason(tmp_path
 
 
 def test_a_capped_level_gives_a_new_layout_its_share_and_displaces_no_more(tmp_path):
-    from robofollow.build.pipeline import compile_specs
+    from robofollow.benchmark.pipeline import compile_specs
 
     before = compile_specs(SPECS)
     l1_rule = "split L1 layouts=(scene1_1, scene1_2, scene1_3)"

@@ -15,7 +15,7 @@ from robofollow.audit.task_list import (
     read_task_list,
     task_list,
 )
-from robofollow.build.pipeline import compile_specs
+from robofollow.benchmark.pipeline import compile_specs
 from robofollow.cli import main
 from robofollow.errors import RoboFollowError
 from robofollow.resources import builtin_specs

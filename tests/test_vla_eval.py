@@ -17,8 +17,8 @@ try:
 except ImportError as missing:  # a failure, not a skip: the adapter is tested in CI
     raise ImportError("these tests need vla-eval: pip install 'robofollow[vla-eval]'") from missing
 
-from robofollow.build.pipeline import compile_specs
-from robofollow.build.rounds import find_episode
+from robofollow.benchmark.pipeline import compile_specs
+from robofollow.benchmark.rounds import find_episode
 from robofollow.eval.chance import references
 from robofollow.eval.episode import run_episode
 from robofollow.eval.reference import ExpertPolicy

@@ -8,9 +8,9 @@ import shutil
 from pathlib import Path
 
 from robofollow.audit.splits import findings
-from robofollow.build.pipeline import compile_specs
-from robofollow.build.rounds import all_episodes
-from robofollow.build.summary import summary
+from robofollow.benchmark.pipeline import compile_specs
+from robofollow.benchmark.rounds import all_episodes
+from robofollow.benchmark.summary import summary
 from robofollow.eval.verify import run_expert_episodes
 from robofollow.resources import builtin_specs
 

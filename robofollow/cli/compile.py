@@ -30,9 +30,9 @@ def add_compile(commands) -> None:
 
 
 def cmd_compile(args) -> int:
-    from robofollow.build.output import check_out, write
-    from robofollow.build.pipeline import clean, compile_specs
-    from robofollow.build.summary import summary
+    from robofollow.benchmark.output import check_out, write
+    from robofollow.benchmark.pipeline import clean, compile_specs
+    from robofollow.benchmark.summary import summary
 
     check_out(Path(args.out))  # before the work: an --out that cannot take the build is refused
     specs = specs_of(args)
@@ -46,7 +46,7 @@ def cmd_compile(args) -> int:
 
 def _verify(compiled, specs: Path, rounds: int, workers: int | None) -> bool:
     """The expert on the first `rounds` rounds of every test task; failures listed."""
-    from robofollow.build.rounds import all_episodes
+    from robofollow.benchmark.rounds import all_episodes
     from robofollow.eval.verify import run_expert_episodes
 
     episodes = [e for e in all_episodes(compiled) if e.round <= rounds]
@@ -85,8 +85,8 @@ def add_audit(commands) -> None:
 
 def cmd_audit(args) -> int:
     from robofollow.audit.task_list import audit_task_list, read_task_list, task_list
-    from robofollow.build.pipeline import clean, compile_specs
-    from robofollow.build.summary import summary
+    from robofollow.benchmark.pipeline import clean, compile_specs
+    from robofollow.benchmark.summary import summary
     from robofollow.files import write_jsonl
 
     compiled = compile_specs(specs_of(args))

@@ -48,7 +48,7 @@ def add_generate(commands) -> None:
 
 
 def cmd_generate(args) -> int:
-    from robofollow.build.pipeline import compile_specs
+    from robofollow.benchmark.pipeline import compile_specs
     from robofollow.data.generate import generate
     from robofollow.data.jobs import select_tasks
     from robofollow.data.units import Options

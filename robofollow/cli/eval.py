@@ -86,7 +86,7 @@ def add_eval(commands) -> None:
 
 
 def cmd_eval(args) -> int:
-    from robofollow.build.pipeline import compile_specs
+    from robofollow.benchmark.pipeline import compile_specs
     from robofollow.eval.loading import with_privileged
     from robofollow.eval.policy_kind import is_server
     from robofollow.eval.report import write_report

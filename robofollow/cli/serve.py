@@ -44,7 +44,7 @@ def add_serve(commands) -> None:
 def cmd_serve(args) -> int:
     import logging
 
-    from robofollow.build.pipeline import compile_specs
+    from robofollow.benchmark.pipeline import compile_specs
     from robofollow.eval.serving import ServerLimits
     from robofollow.eval.tcp_server import TcpPolicyServer
     from robofollow.eval.websocket_server import PolicyServer

@@ -29,8 +29,8 @@ def add_score(commands) -> None:
 
 
 def cmd_score(args) -> int:
-    from robofollow.build.pipeline import compile_specs
-    from robofollow.build.rounds import find_episode
+    from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.benchmark.rounds import find_episode
     from robofollow.scoring import score_recording
     from robofollow.trajectory import Trajectory
 
@@ -75,8 +75,8 @@ def add_expert(commands) -> None:
 
 
 def cmd_expert(args) -> int:
-    from robofollow.build.pipeline import compile_specs
-    from robofollow.build.rounds import find_episode
+    from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.benchmark.rounds import find_episode
     from robofollow.sim.cameras import side_by_side
     from robofollow.sim.rollout import run_expert
     from robofollow.sim.simulation import CONTROL_HZ
@@ -127,7 +127,7 @@ def add_render(commands) -> None:
 
 
 def cmd_render(args) -> int:
-    from robofollow.build.pipeline import compile_specs
+    from robofollow.benchmark.pipeline import compile_specs
     from robofollow.sim.picture import layout_picture
 
     compiled = compile_specs(specs_of(args))

@@ -51,7 +51,7 @@ def add_vqa(commands) -> None:
 
 
 def cmd_vqa(args) -> int:
-    from robofollow.build.pipeline import compile_specs
+    from robofollow.benchmark.pipeline import compile_specs
     from robofollow.vqa.paper import LAYOUT, SCENE
     from robofollow.vqa.probe import write_probe
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
 from robofollow.data.jobs import DemoJob, demo_jobs
 from robofollow.data.units import Options, UnitRecorder, unit_path

@@ -13,8 +13,8 @@ import numpy as np
 from robofollow.errors import RoboFollowError
 
 if TYPE_CHECKING:  # the CLI reads this module's constants without loading the compiler
-    from robofollow.build.episode import EpisodeSetup
-    from robofollow.build.pipeline import Compiled
+    from robofollow.benchmark.episode import EpisodeSetup
+    from robofollow.benchmark.pipeline import Compiled
     from robofollow.compiler.behaviour import Behaviour
 
 # Demonstration seeds live far above the test episodes' seeds (split seed bases are small and
@@ -48,7 +48,7 @@ class DemoJob:
 
     def episode(self, attempt: int) -> EpisodeSetup:
         """What the expert runner takes for one attempt."""
-        from robofollow.build.episode import EpisodeSetup
+        from robofollow.benchmark.episode import EpisodeSetup
 
         return EpisodeSetup(id=f"{self.label}#demo{self.index}", scene=self.scene,
                             layout=self.layout, seed=self.seed(attempt), behaviour=self.behaviour)

@@ -19,7 +19,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.data.jobs import MAX_ATTEMPTS, DemoJob
 from robofollow.data.sinks import ArraySink, FrameSink, VideoSink
 from robofollow.errors import RoboFollowError

@@ -13,8 +13,8 @@ followed_intent   the Intent earned by perfectly following the instruction the p
 
 from __future__ import annotations
 
-from robofollow.build.episode import Episode
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.episode import Episode
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
 from robofollow.eval.reference import available_behaviours, understood

@@ -13,8 +13,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robofollow.build.episode import Episode
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.episode import Episode
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.eval.deadline import PolicyTimeout, check_deadline, deadline
 from robofollow.eval.policy import BadActionError, Policy, Privileged, validate_actions
 from robofollow.oracle.results import EpisodeScore

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robofollow.build.episode import Episode
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.episode import Episode
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import ground
 from robofollow.compiler.world import World

@@ -31,9 +31,9 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from robofollow.build.episode import Episode
-from robofollow.build.pipeline import Compiled
-from robofollow.build.rounds import all_episodes
+from robofollow.benchmark.episode import Episode
+from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.rounds import all_episodes
 from robofollow.errors import RoboFollowError, error_text
 from robofollow.eval.chance import references
 from robofollow.eval.episode import EpisodeRun, run_episode

@@ -23,7 +23,7 @@ from importlib.metadata import version
 
 import numpy as np
 
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.errors import RoboFollowError
 from robofollow.eval.limits import IDLE_TIMEOUT_S, MAX_CLIENTS, MAX_MESSAGE_BYTES
 from robofollow.eval.loading import load_policy

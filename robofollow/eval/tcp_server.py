@@ -15,7 +15,7 @@ import socket
 import threading
 import time
 
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.eval.limits import DEFAULT_HOST
 from robofollow.eval.policy import server_text
 from robofollow.eval.serving import (

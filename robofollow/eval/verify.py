@@ -10,8 +10,8 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from robofollow.build.episode import Episode
-from robofollow.build.pipeline import compile_specs
+from robofollow.benchmark.episode import Episode
+from robofollow.benchmark.pipeline import compile_specs
 from robofollow.workers import results
 
 

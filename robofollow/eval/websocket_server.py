@@ -17,7 +17,7 @@ from websockets.exceptions import ConnectionClosed
 from websockets.frames import CloseCode
 from websockets.sync.server import serve
 
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.eval.limits import DEFAULT_HOST
 from robofollow.eval.serving import (
     PolicyPool,

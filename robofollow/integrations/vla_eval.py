@@ -33,7 +33,7 @@ from vla_eval.render import configure_mujoco_render
 from vla_eval.specs import IMAGE_RGB, LANGUAGE, STATE_JOINT, DimSpec
 
 if TYPE_CHECKING:  # (MuJoCo is imported only after configure_mujoco_render)
-    from robofollow.build.episode import Episode
+    from robofollow.benchmark.episode import Episode
 
 _ALL_ROUNDS = 10 ** 9
 IMAGE_POLICY_USES = frozenset({"state", "instruction", "images"})  # what a model server reads
@@ -64,7 +64,7 @@ class RoboFollowBenchmark(StepBenchmark):
                  width: int = 320, height: int = 240) -> None:
         super().__init__()
         # Imported here, after configure_render: MuJoCo binds its GL backend when imported.
-        from robofollow.build.pipeline import compile_specs
+        from robofollow.benchmark.pipeline import compile_specs
         from robofollow.compiler.spec import LEVELS
         from robofollow.eval.modes import INSTRUCTION_MODES
         from robofollow.eval.runner import EvalOptions, select_episodes

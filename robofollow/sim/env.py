@@ -26,7 +26,7 @@ import numpy as np
 from gymnasium import spaces
 
 from robofollow import compiled_cache
-from robofollow.build.episode import Episode
+from robofollow.benchmark.episode import Episode
 from robofollow.resources import builtin_specs
 from robofollow.sim import MAX_STEPS, robot
 from robofollow.sim.cameras import CAMERA_NAMES, Cameras

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robofollow.build.episode import EpisodeSetup
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.episode import EpisodeSetup
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.plans import plan
 from robofollow.oracle.results import EpisodeScore
 from robofollow.scoring import score_recording

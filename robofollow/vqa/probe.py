@@ -21,7 +21,7 @@ import numpy as np
 from PIL import Image
 from tqdm import tqdm
 
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.errors import RoboFollowError
 from robofollow.files import write_json, write_jsonl
 from robofollow.sim.stage import Stage

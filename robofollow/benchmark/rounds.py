@@ -7,8 +7,8 @@ import difflib
 import hashlib
 from collections.abc import Iterator
 
-from robofollow.build.episode import Episode
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.episode import Episode
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.spec import LEVELS, SplitRule
 from robofollow.compiler.splits import TestTask, episode_seed
 from robofollow.errors import RoboFollowError

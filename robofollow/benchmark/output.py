@@ -21,9 +21,9 @@ import secrets
 import shutil
 from pathlib import Path
 
-from robofollow.build.pipeline import Compiled
-from robofollow.build.rounds import episode_records
-from robofollow.build.summary import changes, summary
+from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.rounds import episode_records
+from robofollow.benchmark.summary import changes, summary
 from robofollow.compiler.goals import goal_graph, graph_to_dict
 from robofollow.compiler.plans import plan
 from robofollow.compiler.spec import LEVELS

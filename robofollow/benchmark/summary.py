@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from robofollow.audit.splits import FINDING_KEYS
-from robofollow.build.pipeline import Compiled
+from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.spec import LEVELS
 
 
