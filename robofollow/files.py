@@ -90,8 +90,8 @@ class JsonLine:
 
 
 def json_lines(data: bytes) -> Iterator[JsonLine]:
-    """The lines of JSON Lines data that are not blank, split at "\n" only (U+2028 and U+2029
-    stay inside their record)."""
+    """The lines of JSON Lines data that are not blank, split at newlines only (U+2028 and
+    U+2029 stay inside their record)."""
     for number, raw in enumerate(data.split(b"\n"), start=1):
         if not raw.strip():
             continue

@@ -15,7 +15,6 @@ anything else is refused.
 from __future__ import annotations
 
 import errno
-import json
 import os
 import secrets
 import shutil
@@ -29,7 +28,7 @@ from robofollow.compiler.plans import plan
 from robofollow.compiler.spec import LEVELS
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
-from robofollow.files import json_line
+from robofollow.files import json_line, json_lines
 
 
 def _line(record: dict) -> str:
@@ -42,14 +41,11 @@ def _task_ids(out: Path) -> set[str]:
     ids = set()
     for path in sorted((out / "tasks").glob("*.jsonl")) if (out / "tasks").is_dir() else ():
         try:
-            with open(path, encoding="utf-8") as lines:
-                for line in lines:
-                    try:
-                        ids.add(str(json.loads(line)["task"]))
-                    except (ValueError, KeyError, TypeError):
-                        continue
-        except (OSError, UnicodeDecodeError):
+            data = path.read_bytes()
+        except OSError:
             continue
+        ids.update(str(line.value["task"]) for line in json_lines(data)
+                   if isinstance(line.value, dict) and "task" in line.value)
     return ids
 
 

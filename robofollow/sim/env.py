@@ -81,9 +81,7 @@ class RoboFollowEnv(gym.Env):
         jitter_seed = self.episode.seed if seed is None else seed
         self.sim.reset(jitter_seed)
         self.steps, self.clipped, self.command = 0, 0, robot.home_state()
-        self.recorder = Recorder(self.sim, {"episode": self.episode.id,
-                                            "scene": scene.id, "layout": self.episode.layout,
-                                            "seed": jitter_seed})
+        self.recorder = Recorder(self.sim, {**self.episode.meta(), "seed": jitter_seed})
         self.recorder.frame(self.command)
         return self._observation(), self._info()
 
