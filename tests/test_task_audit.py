@@ -20,6 +20,7 @@ from robofollow.cli import main
 from robofollow.errors import RoboFollowError
 from robofollow.resources import builtin_specs
 from tests.sim_helpers import benchmark
+from tests.spec_helpers import ROUTES
 
 
 def _task(task_id: str, scene: str, level: str, layout: str, instruction: str,
@@ -196,3 +197,42 @@ def test_a_task_list_that_is_not_utf8_is_named_at_its_byte(tmp_path):
     path.write_bytes(json.dumps(TASKS[0]).encode() + b'\n{"id": "\xff"}\n')
     with pytest.raises(RoboFollowError, match=r"bad.jsonl:2:9: not UTF-8 text \(byte 0xff\)"):
         read_task_list(path)
+
+
+def _route_task(task_id: str, layout: str, source: str, words: str) -> dict:
+    return _task(task_id, "routes", "L1", layout,
+                 f"Use your left arm to pick up the {source} slab, {words}, and place it on the "
+                 "green square label.")
+
+
+def test_routes_that_ask_for_nothing_are_route_findings(tmp_path, capsys):
+    """A listed 'avoid X' whose X a straight carry never passes over (after a swap), and a
+    'pass over W' that the carry passes over at pick-up or set-down, are `route` findings."""
+    specs = tmp_path / "specs"
+    specs.mkdir()
+    (specs / "routes.rf").write_text(ROUTES)
+    listed = [
+        _route_task("sound", "swapped", "blue", "avoid passing over the green slab"),
+        _route_task("off-path", "swapped", "blue", "avoid passing over the red slab"),
+        _route_task("pick-up", "sources_swapped", "blue", "pass over the red square label"),
+        _route_task("set-down", "set_down", "blue", "pass over the blue square label"),
+    ]
+    path = tmp_path / "tasks.jsonl"
+    path.write_text("".join(json.dumps(t) + "\n" for t in listed))
+    assert main(["audit", str(specs), "--tasks", str(path), "--json"]) == 1
+    report = json.loads(capsys.readouterr().out)
+    routes = {f["id"]: f["message"] for f in report["findings"] if f["kind"] == "route"}
+    assert sorted(routes) == ["off-path", "pick-up", "set-down"]
+    assert routes["off-path"].startswith(
+        "'avoid red_slab': red_slab is 7.8 cm off the straight path from blue_slab to "
+        "green_label; carried straight, blue_slab sweeps 2.8 cm to either side and red_slab "
+        "reaches 2.8 cm towards the path, so a straight carry clears it by 2.2 cm")
+    assert "lies in the footprint of blue_slab" in routes["pick-up"]
+    assert "while picking up" in routes["pick-up"]
+    assert "lies in the footprint of green_label" in routes["set-down"]
+    assert "while setting down" in routes["set-down"]
+    compiled = compile_specs(specs)
+    result = audit_task_list(compiled.spec, compiled.training,
+                             [ListedTask(**t) for t in listed])
+    assert [f["id"] for f in result["findings"] if f["kind"] == "route"] == [
+        "off-path", "pick-up", "set-down"]

@@ -8,7 +8,7 @@ import pytest
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.training import check_training, describe
 from robofollow.errors import SpecErrors
-from tests.spec_helpers import edit
+from tests.spec_helpers import edit, route_task, routes_with
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
 GOLDEN = json.loads((Path(__file__).parent / "data" / "training_behaviours.json").read_text())
@@ -103,3 +103,23 @@ def test_a_training_task_out_of_reach_is_an_error(tmp_path):
     assert error.code == "infeasible" and error.message.startswith(
         "the expert cannot do this: pre_grasp: the left arm would stretch 83.2 cm to (40.0, "
         "10.0, 84.0) cm with the jitter, beyond its 58.6 cm reach (and 3 more plan points)")
+
+
+@pytest.mark.parametrize("layout, source, words, message", [
+    # after the swap the red slab stands 7.8 cm off the carry: avoiding it asks for nothing
+    ("swapped", "blue", "avoid passing over the red slab",
+     ("'avoid red_slab': red_slab is 7.8 cm off the straight path from blue_slab to green_label; "
+      "carried straight, blue_slab sweeps 2.8 cm to either side")),
+    # the yellow slab stands on the red label: the carry passes over it while picking up
+    ("base", "yellow", "pass over the red square label",
+     "'pass over red_label': red_label lies in the footprint of yellow_slab"),
+], ids=["avoid-off-the-path", "pass-over-at-pick-up"])
+def test_a_training_route_that_asks_for_nothing_is_located(tmp_path, layout, source, words,
+                                                            message):
+    text = routes_with(route_task(layout, source, words))
+    errors = check(tmp_path, text)
+    line = text.index('"Use your left arm to pick up the ' + source)
+    task_line = text[:line].count("\n")  # the line before the paraphrase's (1-based)
+    assert [(e.code, e.line, e.column) for e in errors] == [("degenerate-route", task_line, 10)]
+    assert errors[0].render().splitlines()[0].startswith(f"{errors[0].file}:{task_line}:10:")
+    assert message in errors[0].message
