@@ -45,7 +45,7 @@ def test_listed_tests_compile_into_their_levels_with_episodes(tmp_path):
                                         "repertoire_violations", "ambiguities"))
 
 
-def test_a_listed_test_is_audited_like_a_generated_one(tmp_path, capsys):
+def test_a_listed_test_obeys_the_rules_of_a_generated_one(tmp_path, capsys):
     folder = _spec(tmp_path, '''
     test L2 copied on default {
         "Use your left arm to pick up the red cylinder."
@@ -54,11 +54,12 @@ def test_a_listed_test_is_audited_like_a_generated_one(tmp_path, capsys):
         "Use your right arm to pick up the red cylinder."
     }
 ''')
-    assert main(["audit", str(folder)]) == 1
-    text = capsys.readouterr().out
-    assert "scene2/L2/copied: its form is a training form" in text
-    assert "scene2/L2/other_arm: pick right large_red_cylinder: no training step moves alike" \
-        in text and "new arm: the right arm (trained: the left arm)" in text
+    assert main(["compile", str(folder), "--out", str(tmp_path / "build")]) == 1
+    text = capsys.readouterr().err
+    assert "scene2.rf:" in text and "test-leakage" in text and "its form is a training form" \
+        in text
+    assert "test-repertoire" in text and "pick right large_red_cylinder: no training step " \
+        "moves alike" in text and "new arm: the right arm (trained: the left arm)" in text
 
 
 def test_what_would_stop_a_candidate_is_an_error_at_the_test(tmp_path, capsys):

@@ -15,8 +15,11 @@ from robofollow.compiler.wordings import concepts
 from robofollow.compiler.world import World
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
-TARGETS = {"scene1": (16, 8, 16, 76), "scene2": (16, 24, 68, 24), "scene3": (16, 40, 64, 96),
-           "scene4": (27, 14, 25, 24)}  # the upstream benchmark's tasks per level
+# the upstream benchmark's tasks per level, but Scene 1's L3: its training instructions say
+# neither 'cube', 'object', 'rightmost' nor 'yellow', which the upstream L3 wordings use, and an
+# L3 wording may use only its own scene's training words
+TARGETS = {"scene1": (16, 8, 16, 17), "scene2": (16, 24, 68, 24), "scene3": (16, 40, 64, 96),
+           "scene4": (27, 14, 25, 24)}
 
 
 @pytest.fixture(scope="module")
@@ -37,15 +40,15 @@ def test_counts_reach_the_targets_within_the_caps(compiled):
             assert cap is None or count <= cap
 
 
-def test_novel_wordings_mean_their_form_and_are_new(compiled):
+def test_novel_wordings_mean_their_form_and_are_new_to_their_scene(compiled):
     spec, _, splits = compiled
-    training_forms = {lf.to_json(f) for t in spec.tasks for f in t.forms}
-    vocabulary = {c for t in spec.tasks for p in t.paraphrases for c in concepts(p)}
     for task in splits.tasks:
         if task.level in ("L2", "L3"):
+            own = spec.scenes[task.scene].tasks
             assert parse(task.instruction) == task.form
-            assert lf.to_json(task.form) not in training_forms
-            assert concepts(task.instruction) <= vocabulary
+            assert lf.to_json(task.form) not in {lf.to_json(f) for t in own for f in t.forms}
+            assert concepts(task.instruction) <= {c for t in own for p in t.paraphrases
+                                                  for c in concepts(p)}
             layouts = spec.scenes[task.scene].training_layouts if task.level == "L2" else \
                 spec.scenes[task.scene].splits["L3"].layouts
             assert task.layout in layouts
@@ -75,10 +78,10 @@ def test_every_rejection_says_why(compiled):
     _, _, splits = compiled
     reasons = {r.reason.split(":")[0] for r in splits.rejected}
     assert all(r.reason for r in splits.rejected)
-    assert {"no-referent", "ambiguous", "outside the training repertoire",
-            "a training task has this form"} <= reasons
+    assert {"no-referent", "ambiguous", "repertoire", "leakage", "words", "duplicate",
+            "route"} <= reasons
     assert any(r.reason.startswith("over the split's max") for r in splits.rejected)
-    off_way = [r for r in splits.rejected if r.reason.startswith("degenerate route")]
+    off_way = [r for r in splits.rejected if r.reason.startswith("route")]
     assert off_way and all(r.layout == "scene3_3" or r.layout == "scene3_4" for r in off_way)
 
 
@@ -123,7 +126,8 @@ def test_routes_compare_by_the_bodies_passed_over(compiled):
 
 
 def _scene1_with(tmp_path: Path, old: str, new: str) -> Path:
-    """The shipped specs (their training words make the L2/L3 wordings) with scene1 edited."""
+    """The shipped specs with scene1 edited."""
+    tmp_path.mkdir(exist_ok=True)
     for spec in SPECS.glob("*.rf"):
         (tmp_path / spec.name).write_text(spec.read_text())
     text = (SPECS / "scene1.rf").read_text()
@@ -148,11 +152,14 @@ def test_a_rule_layout_that_yields_nothing_is_a_warning_with_the_reason(tmp_path
 def test_a_capped_level_gives_a_new_layout_its_share_and_displaces_no_more(tmp_path):
     from robofollow.benchmark.pipeline import compile_specs
 
-    before = compile_specs(SPECS)
+    capped = L3_RULE + " wordings=(referents) max=12"
+    rule = L3_RULE + " wordings=(referents) max=80"
+    before = compile_specs(_scene1_with(tmp_path / "before", rule, capped))
+    assert len(before.splits.of("scene1", "L3")) == 12
     l1_rule = "split L1 layouts=(scene1_1, scene1_2, scene1_3)"
-    folder = _scene1_with(tmp_path, l1_rule, "layout scene1_4 from default { swap red_sphere "
-                          "red_cylinder }\n    " + l1_rule.replace(")", ", scene1_4)"))
-    text = (folder / "scene1.rf").read_text().replace(L3_RULE, L3_RULE.replace(")", ", scene1_4)"))
+    folder = _scene1_with(tmp_path / "after", l1_rule, "layout scene1_4 from default { swap "
+                          "red_sphere red_cylinder }\n    " + l1_rule.replace(")", ", scene1_4)"))
+    text = (folder / "scene1.rf").read_text().replace(rule, capped.replace(")", ", scene1_4)", 1))
     (folder / "scene1.rf").write_text(text)
     after = compile_specs(folder)
     old = {t.id for t in before.splits.of("scene1", "L3")}

@@ -69,6 +69,13 @@ TASKS = [
           "behind the red cylinder."),
     _task("new-object", "scene2", "L1", "scene2_2",
           "Pick up the smaller blue object using your left arm."),
+    # the blue cube is the larger one, and the yellow bowl the larger bowl
+    _task("misordered", "scene2", "L2", "default",
+          "Use your left arm to place the blue cylinder on the blue smaller cube."),
+    _task("clause", "scene2", "L2", "default",
+          "Use your left arm to pick up the blue cube that is rightmost."),
+    _task("one-bowl", "scene2", "L2", "default", "Use your right arm to pick up the rightmost "
+          "cube and place it in the smaller yellow bowl."),
     _task("new-pair", "scene4", "L1", "scene4_4",
           "First use your left arm to pick up the red sphere, then use your right arm to pick up "
           "the green cylinder."),
@@ -137,6 +144,12 @@ def test_every_kind_of_finding_is_reported(findings):
                               "(10.0, 4.5, 76.1) cm)"),
     ("new-object", "repertoire", "new object: 4.0 x 4.0 x 5.0 cm, upright (trained: 6.0 x 6.0 "
                                  "x 6.0 cm, upright)"),
+    ("misordered", "wording", "order: 'blue smaller' puts a colour before a size word"),
+    ("misordered", "wording", "vacuous: 'smaller' in 'cube[blue, smaller]' compares 1 body "
+                              "(large_blue_cube)"),
+    ("clause", "wording", "clause: 'cube[blue, rightmost]' is scored as large_blue_cube, but "
+                          "the rightmost cube is small_red_cube"),
+    ("one-bowl", "wording", "vacuous: 'smaller' in 'bowl[yellow, smaller]' compares 1 body"),
     ("new-pair", "repertoire", "every step is trained, but no training task performs them "
                                "together in this order"),
 ])
@@ -167,7 +180,8 @@ def test_the_cli_exports_audits_and_groups_findings(tmp_path, capsys):
     exported = tmp_path / "tasks.jsonl"
     assert main(["audit", specs, "--export-tasks", str(exported), "--tasks",
                  str(exported)]) == 0
-    assert "698 tasks checked, no findings" in capsys.readouterr().out
+    count = len(exported.read_text().splitlines())
+    assert count > 600 and f"{count} tasks checked, no findings" in capsys.readouterr().out
     listed = tmp_path / "mine.jsonl"
     listed.write_text("".join(json.dumps(t) + "\n" for t in TASKS[:3]))
     assert main(["audit", specs, "--tasks", str(listed)]) == 1

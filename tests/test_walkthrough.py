@@ -49,7 +49,7 @@ def test_the_readme_walkthrough_compiles_as_described(tmp_path):
     assert len(new) == 13
     moved = {r.origin: r.reason for r in compiled.splits.rejected
              if r.layout == "scene2_7" and r.level == "L1" and "small_red_cube" in r.reason}
-    assert len(moved) == 6 and all(reason.startswith("outside the training repertoire")
+    assert len(moved) == 6 and all(reason.startswith("repertoire: ")
                                    and ("new pick location" in reason
                                         or "new put location" in reason)
                                    for reason in moved.values())

@@ -15,6 +15,9 @@ repertoire    training does not perform the behaviour's motions (arm, action, th
               and size, pick and put locations, route, yaw), naming the parts that are new
 duplicate     it repeats an earlier task of the list: the same level and meaning on a layout
               that looks the same
+wording       a wording that is not a training instruction reads otherwise than it is scored:
+              premodifiers out of English order, a comparison among fewer than two bodies, a
+              superlative after the noun that the head noun alone would give to another body
 leakage       as in the split audit: training pairs or forms, spec identifiers in the words
 level         the task is not what its level claims (L0 training pairs, L1 training
               instructions on new layouts, L2 training layouts, L3 new layouts)
@@ -23,29 +26,23 @@ invalid       an unknown scene, layout or level
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from pydantic import ValidationError
 
-from robofollow.audit.splits import SeenTasks, TrainingFacts
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour, describe
-from robofollow.compiler.feasibility import infeasible
-from robofollow.compiler.grounding import Grounder, GroundingError, Unstable, first_unstable
 from robofollow.compiler.model import Model
-from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
 from robofollow.compiler.parser import parse
-from robofollow.compiler.routes import degenerate_routes
 from robofollow.compiler.spec import LEVELS, Spec
 from robofollow.compiler.spec_files import Sources, spec_error
 from robofollow.compiler.splits import TestTask
-from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
+from robofollow.compiler.task_rules import TaskRules
 from robofollow.errors import InstructionError, RoboFollowError, SpecError
 from robofollow.files import json_lines
 
 FINDING_KINDS = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "route",
-                 "infeasible", "repertoire", "duplicate", "leakage", "level")
+                 "infeasible", "repertoire", "duplicate", "leakage", "level", "wording")
 STEP_FIELDS = ("action", "arm", "source", "relation", "target", "waypoints", "yaw_degrees")
 
 
@@ -67,13 +64,12 @@ class Examination:
 
 
 class TaskAuditor:
+    """Examines listed tasks in order with each scene's test-task rules (task_rules.py), plus
+    what only a list has: unknown names, parse errors and `expect` fields."""
+
     def __init__(self, spec: Spec, training: dict[str, Behaviour]):
         self.spec, self.training = spec, training
-        self.facts = TrainingFacts(spec)
-        self.seen = SeenTasks(spec)
-        self.repertoires = {scene.id: Repertoire(scene, training)
-                            for scene in spec.scenes.values()}
-        self.grounders: dict[tuple[str, str], list[Grounder]] = {}
+        self.rules = {scene.id: TaskRules(scene, training) for scene in spec.scenes.values()}
 
     def audit(self, task: ListedTask) -> list[dict]:
         return [{"id": task.id, "kind": kind, "message": message}
@@ -82,143 +78,52 @@ class TaskAuditor:
     def examine(self, task: ListedTask) -> Examination:
         """The findings, and the form and behaviour as far as the task gets."""
         found: list[tuple[str, str]] = []
-        form = behaviour = None
         scene = self.spec.scenes.get(task.scene)
         if scene is None:
-            found.append(("invalid", f"no scene {task.scene!r} (scenes: "
-                                     f"{', '.join(self.spec.scenes)})"))
-            return Examination(found, form, behaviour)
-        if task.layout not in scene.layouts:
-            found.append(("invalid", f"{task.scene} has no layout {task.layout!r} (layouts: "
-                                     f"{', '.join(scene.layouts)})"))
-            return Examination(found, form, behaviour)
-        if task.level not in LEVELS:
+            found.append(("invalid", (f"no scene {task.scene!r} (scenes: "
+                                      f"{', '.join(self.spec.scenes)})")))
+        elif task.layout not in scene.layouts:
+            found.append(("invalid", (f"{task.scene} has no layout {task.layout!r} "
+                                      f"(layouts: {', '.join(scene.layouts)})")))
+        elif task.level not in LEVELS:
             found.append(("invalid", f"no level {task.level!r} (levels: {', '.join(LEVELS)})"))
-            return Examination(found, form, behaviour)
+        if found:
+            return Examination(found, None, None)
         try:
             form = parse(task.instruction)
         except InstructionError as error:
-            found.append(("parse", f"column {error.column}: {error.message}"))
-            return Examination(found, form, behaviour)
-        form_json = lf.to_json(form)
-        repeat = self.seen.repeat(task.id, task.scene, task.level, task.layout, form_json)
-        if repeat:
-            found.append(("duplicate", repeat))
-        for message in self.facts.leakage(task.level, task.scene, task.layout, form_json,
-                                          task.instruction):
-            found.append(("leakage", message))
-        for message in self.facts.level_problems(task.level, task.scene, task.layout,
-                                                 form_json, task.instruction):
-            found.append(("level", message))
-        grounders = self._grounders(task.scene, task.layout)
+            return Examination([("parse", f"column {error.column}: {error.message}")], None, None)
         try:
-            behaviour = grounders[0].behaviour(form)
-        except GroundingError as error:
-            found.append((_grounding_kind(error), _grounding_message(error, grounders[0].world)))
-            return Examination(found, form, behaviour)
-        unstable = first_unstable(form, grounders[1:], behaviour, first_case=1)
-        if unstable is not None:
-            found.append(("ambiguous", _jitter_problem(unstable, behaviour)))
-        expect = None
-        if task.expect is not None:
-            try:
-                expect = _expectation(task.expect)
-            except ValueError as error:
-                found.append(("invalid", f"expect: {error}"))
-                return Examination(found, form, behaviour)
-        behaviour = self._fill_arms(behaviour, expect, scene.id, grounders[0].world)
-        if expect is not None:
-            mismatch = _mismatch(behaviour, expect)
+            expect = None if task.expect is None else _expectation(task.expect)
+        except ValueError as error:
+            return Examination([("invalid", f"expect: {error}")], form, None)
+        rules = self.rules[scene.id]
+        examined = rules.examine(task.level, task.layout, task.instruction, form,
+                                 self._arms(expect, rules))
+        found = examined.findings
+        if expect is not None and examined.behaviour is not None:
+            mismatch = _mismatch(examined.behaviour, expect)
             if mismatch:
                 found.append(("expectation", mismatch))
-        world = grounders[0].world
-        found += [("route", problem) for step in behaviour.steps
-                  for problem in degenerate_routes(step, world)]
-        found += [("infeasible", problem) for problem in
-                  infeasible(behaviour, grounders[0].world)]
-        missing = self.repertoires[scene.id].missing(behaviour, world,
-                                                     compose=task.level in COMPOSING_LEVELS)
-        if missing:
-            found.append(("repertoire", missing))
-        return Examination(found, form, behaviour)
+        rules.keep(task.id, task.level, task.layout, form)
+        return Examination(found, form, examined.behaviour)
 
-    def _grounders(self, scene: str, layout: str) -> list[Grounder]:
-        key = (scene, layout)
-        if key not in self.grounders:
-            self.grounders[key] = [Grounder(w) for w in jitter_worlds(self.spec.scenes[scene],
-                                                                       layout)]
-        return self.grounders[key]
-
-    def _fill_arms(self, behaviour: Behaviour, expect: dict | None, scene: str,
-                   world: World) -> Behaviour:
+    @staticmethod
+    def _arms(expect: dict | None, rules: TaskRules):
         """Unnamed arms: the expectation's, else the one arm training uses for those steps."""
-        steps = list(behaviour.steps)
         wanted = (expect or {}).get("steps") or []
-        for index, step in enumerate(steps):
-            if step.arm is not None:
-                continue
-            arm = wanted[index].get("arm") if index < len(wanted) else None
-            if arm is None:
-                arm = self.repertoires[scene].arm_for(behaviour, index, world)
-            steps[index] = step.model_copy(update={"arm": arm})
-        return behaviour.model_copy(update={"steps": tuple(steps)})
 
-
-def _grounding_kind(error: GroundingError) -> str:
-    return "ambiguous" if error.code == "ambiguous" else "no-referent"
-
-
-def _grounding_message(error: GroundingError, world: World) -> str:
-    if error.code == "ambiguous" and error.candidates:
-        return f"{error.message} ({_distances(error, world)})"
-    if error.code == "no-referent" and error.ref is not None:
-        kinds = sorted({b for b in world.bodies if world.bodies[b].kind == error.ref.noun})
-        there = f"; the layout's {error.ref.noun}s: {', '.join(kinds)}" if kinds else ""
-        return error.message + there
-    return error.message
-
-
-def _distances(error: GroundingError, world: World) -> str:
-    """How far apart the candidates are, by what decided between them."""
-    ref, candidates = error.ref, error.candidates
-    extreme = next((c for c in (ref.constraints if ref else ())
-                    if isinstance(c, lf.ExtremeIs)), None)
-    if extreme is not None:
-        axis, _ = EXTREME_AXES[extreme.extreme]
-        name = "xy"[axis]
-        return ", ".join(f"{b} at {name} = {100 * (world.poses[b].x, world.poses[b].y)[axis]:.1f}"
-                         f" cm" for b in candidates)
-    related = next((c for c in (ref.constraints if ref else ())
-                    if isinstance(c, (lf.NearestIs, lf.Related))), None)
-    if related is not None:
-        try:
-            anchor = world.poses[Grounder(world).resolve(related.landmark)]
-        except GroundingError:
-            anchor = None
-        if anchor is not None:
-            return ", ".join(f"{b} {100 * _apart(world, b, anchor):.1f} cm away"
-                             for b in candidates)
-    return ", ".join(f"{b} at ({100 * world.poses[b].x:.1f}, {100 * world.poses[b].y:.1f}) cm"
-                     for b in candidates)
-
-
-def _apart(world: World, body: str, anchor) -> float:
-    pose = world.poses[body]
-    return math.hypot(pose.x - anchor.x, pose.y - anchor.y)
-
-
-def _jitter_problem(unstable: Unstable, nominal: Behaviour) -> str:
-    where = f"at jitter extreme {unstable.case}"
-    error = unstable.error
-    if error is not None:
-        return (f"{where}: {error.message} ({_distances(error, unstable.world)})"
-                if error.candidates else f"{where}: {error.message}")
-    objects = [(s.source, s.target) for s in nominal.steps]
-    return f"{where} it picks {_objects(unstable.objects)} instead of {_objects(objects)}"
-
-
-def _objects(pairs: list[tuple]) -> str:
-    return ", ".join("/".join(b for b in pair if b) for pair in pairs)
+        def fill(behaviour: Behaviour, world) -> Behaviour:
+            steps = list(behaviour.steps)
+            for index, step in enumerate(steps):
+                if step.arm is not None:
+                    continue
+                arm = wanted[index].get("arm") if index < len(wanted) else None
+                if arm is None:
+                    arm = rules.repertoire.arm_for(behaviour, index, world)
+                steps[index] = step.model_copy(update={"arm": arm})
+            return behaviour.model_copy(update={"steps": tuple(steps)})
+        return fill
 
 
 def _expectation(expect: dict) -> dict:
@@ -317,19 +222,15 @@ def task_list(splits) -> list[dict]:
             for t in splits.tasks]
 
 
-# what stops a listed test
-FATAL = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "infeasible")
-
 
 def listed_tests(spec: Spec, training: dict[str, Behaviour], sources: Sources,
                  skip: dict[str, set[str]] | None = None
                  ) -> tuple[tuple[TestTask, ...], list[SpecError]]:
     """The test tasks spec authors list in their levels, compiled, and a located error
-    (showing its line of `sources`) for each that fails (tests on the layouts in `skip` are
-    left unchecked). What would stop a
-    generated candidate (no single referent, also at the jitter extremes, another behaviour
-    than `expect` states, or one the expert cannot perform) is an error at the test; leakage,
-    level and repertoire problems are left to the split audit, as for generated tasks."""
+    (showing its line of `sources`) for each finding of each that fails (tests on the layouts
+    in `skip` are left unchecked). A listed test obeys every rule a generated candidate does
+    (task_rules.py) and its `expect`: the split generator keeps it as it is, so whatever the
+    audit would find in it is an error at the test."""
     auditor = TaskAuditor(spec, training)
     tasks, errors = [], []
     for scene in spec.scenes.values():
@@ -342,11 +243,10 @@ def listed_tests(spec: Spec, training: dict[str, Behaviour], sources: Sources,
             examined = auditor.examine(ListedTask(id=test.id, scene=test.scene, level=test.level,
                                                   layout=test.layout,
                                                   instruction=test.instruction, expect=expect))
-            fatal = [(kind, message) for kind, message in examined.findings if kind in FATAL]
-            if fatal:
+            if examined.findings:
                 errors += [spec_error(f"test-{kind}", message, test.source, sources,
                                       len(test.name))
-                           for kind, message in fatal]
+                           for kind, message in examined.findings]
                 continue
             tasks.append(TestTask(id=test.id, scene=test.scene, level=test.level,
                                   layout=test.layout, instruction=test.instruction,

@@ -90,8 +90,7 @@ def _compile(specs: Path | list[Path]) -> Compiled:
     errors = loaded.errors + training_errors + test_errors
     if errors:
         raise SpecErrors(errors)
-    splits = generate(spec, training)
-    splits = splits.model_copy(update={"tasks": splits.tasks + listed})
+    splits = generate(spec, training, listed)
     return Compiled.of(spec, splits, training, audit(spec, training, splits))
 
 

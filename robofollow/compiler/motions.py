@@ -173,6 +173,14 @@ class Repertoire:
                 f"alike; against the nearest, {trained.label} "
                 f"({describe_steps((trained.steps[at],))} on {trained.layout}), {new}")
 
+    def as_trained(self, behaviour: Behaviour, world: World, label: str) -> bool:
+        """Whether `behaviour` moves as training task `label` does, step for step (a test of
+        the trained motion for the trained sentence: a memorised replay passes it)."""
+        trained = next((t for t in self.trained if t.label == label), None)
+        motions = [motion(s, world) for s in behaviour.steps]
+        return trained is not None and len(motions) == len(trained.motions) and all(
+            not differences(a, b) for a, b in zip(motions, trained.motions, strict=True))
+
     def arm_for(self, behaviour: Behaviour, index: int, world: World) -> str | None:
         """The one arm training performs step `index` of `behaviour` with (every other part
         alike), or None when it uses none or both."""

@@ -98,6 +98,14 @@ _ORDINAL_WORDS = {1: "first", 2: "second", 3: "third", 4: "fourth", 5: "fifth"}
 _NEARNESS_WORDS = {"nearest": "closest to", "farthest": "farthest from"}
 
 
+def _english_order(c: lf.Constraint) -> int:
+    """Premodifiers in English order: superlative or 'middle', then size, then colour or kind
+    ('the rightmost smaller red cube'), so that the natural reading is the scored one."""
+    if isinstance(c, (lf.ExtremeIs, lf.MiddleIs)):
+        return 0
+    return 1 if isinstance(c, lf.SizeIs) else 2
+
+
 @cache
 def _frames() -> jinja2.runtime.TemplateModule:
     env = jinja2.Environment(loader=jinja2.PackageLoader("robofollow.compiler", "templates"),
@@ -215,7 +223,7 @@ class Realizer:
         if len(extremes) != 1 or not all(isinstance(x, (lf.ColorIs, lf.SizeIs)) and
                                          not getattr(x, "negated", False) for x in others):
             return None
-        domain = " ".join([self.premod(x) for x in others] +
+        domain = " ".join([self.premod(x) for x in sorted(others, key=_english_order)] +
                           [_PLURALS[self.noun(c.object.noun)]])
         obj = f"the one {_EXTREME_POSITIONS[extremes[0].extreme]}"
         arm_mode = "lead" if self.s.arm == "fronted" else self.s.arm
@@ -314,14 +322,15 @@ class Realizer:
 
     def landmark(self, ref: lf.Ref, determiner: bool = True) -> str:
         """A reference described by premodifiers only."""
-        premods = [self.premod(c) for c in ref.constraints if not isinstance(c, lf.OrdinalIs)]
+        premods = [self.premod(c) for c in sorted(ref.constraints, key=_english_order)
+                   if not isinstance(c, lf.OrdinalIs)]
         return ("the " if determiner else "") + " ".join(self.head(ref, premods))
 
     def ref(self, ref: lf.Ref, determiner: bool = True, relative: bool = False) -> str:
         """A reference; `relative` puts every relation in a relative clause."""
         premods: list[str] = []
         posts: list[tuple[str, str]] = []  # (how it opens when first: "", "that is", ..., phrase)
-        for c in ref.constraints:
+        for c in sorted(ref.constraints, key=_english_order):
             if isinstance(c, lf.OrdinalIs):
                 continue
             post = self.postmodifier(c, relative)

@@ -15,6 +15,7 @@ from collections.abc import Iterator
 from robofollow.compiler import lf
 from robofollow.compiler.grounding import Grounder, GroundingError
 from robofollow.compiler.lexicon import tokenize
+from robofollow.compiler.wording_rules import vacuous_comparisons
 
 _PUNCTUATION = frozenset({"COMMA", "SEMICOLON", "PERIOD"})
 _RELATIONS = ("left_of", "right_of", "behind", "in_front_of", "on", "in")
@@ -58,7 +59,8 @@ class Describer:
         return self._simple[body]
 
     def descriptions(self, body: str) -> list[lf.Ref]:
-        """Every description of one or two constraints that picks out `body`."""
+        """Every description of one or two constraints that picks out `body`, with no
+        comparison made among fewer than two bodies."""
         if body not in self._descriptions:
             self._descriptions[body] = self._describe(body)
         return self._descriptions[body]
@@ -92,7 +94,8 @@ class Describer:
             options.append((lf.MiddleIs(),))
         refs = (lf.Ref(noun=noun, constraints=constraints)
                 for noun in nouns for constraints in options)  # distinct by construction
-        return [ref for ref in refs if self.unique(ref, body)]
+        return [ref for ref in refs
+                if self.unique(ref, body) and not vacuous_comparisons(ref, self.grounder)]
 
 
 def _commands(form: lf.Instruction) -> list[tuple[str, lf.Pick | lf.Place | lf.Push]]:

@@ -1,0 +1,262 @@
+"""The rules every test task obeys: one check, applied by the split generator to each
+candidate before keeping it and by the audit to each compiled or listed task.
+
+A task is examined against its own scene only (its training tasks, layouts and words), so a
+scene's splits never depend on the scenes compiled beside it. The findings, by kind:
+
+duplicate     it repeats an earlier task: the same level and meaning on a layout that looks
+              the same
+leakage       its (layout, form) pair is a training pair; an L2/L3 form is a training form; the
+              words name a spec identifier
+level         it is not what its level claims (L0 training pairs, L1 training instructions on
+              layouts that look new, L2 training layouts, L3 layouts that look new)
+no-referent   a description names nothing on the layout
+ambiguous     a description fits several bodies, nominally or at a jitter extreme
+route         a body the route names is not on the way (routes.py)
+infeasible    the expert cannot perform it (feasibility.py)
+repertoire    training does not perform its motions (motions.py)
+wording       a new wording reads otherwise than it is scored (wording_rules.py); training
+              instructions are the spec author's words and are not judged here
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+from robofollow.compiler import lf
+from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.feasibility import infeasible
+from robofollow.compiler.grounding import Grounder, GroundingError, Unstable, first_unstable
+from robofollow.compiler.lexicon import VOCABULARY
+from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
+from robofollow.compiler.observation import look_alike, same_observation
+from robofollow.compiler.routes import degenerate_routes
+from robofollow.compiler.spec import Scene
+from robofollow.compiler.wording_rules import wording_problems
+from robofollow.compiler.world import EXTREME_AXES, World, jitter_worlds
+
+
+def _identifiers(scene: Scene) -> set[str]:
+    """Spec names that could leak into an instruction (those that are not plain words)."""
+    names = {scene.id} | set(scene.bodies) | set(scene.layouts) | set(scene.points)
+    names |= {task.label for task in scene.tasks}
+    return {n for n in names if n.lower() not in VOCABULARY}
+
+
+class TrainingFacts:
+    """What a scene's training tasks fix, for the leakage and level rules (`form` is a
+    logical form's canonical JSON)."""
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self._look_alike: dict[str, str | None] = {}
+        self.pairs = {(t.layout, lf.to_json(f)) for t in scene.tasks for f in t.forms}
+        self.forms = {form for _, form in self.pairs}
+        self.instructions = {p for t in scene.tasks for p in t.paraphrases}
+        identifiers = sorted(_identifiers(scene), key=len, reverse=True)
+        self.pattern = re.compile(r"\b(" + "|".join(map(re.escape, identifiers)) + r")\b",
+                                  re.IGNORECASE) if identifiers else None
+
+    def leakage(self, level: str, layout: str, form: str, instruction: str) -> list[str]:
+        found = []
+        if level != "L0" and (layout, form) in self.pairs:
+            found.append("its (layout, form) pair is a training pair")
+        if level in COMPOSING_LEVELS and form in self.forms:
+            found.append("its form is a training form")
+        named = self.pattern.search(instruction) if self.pattern else None
+        if named:
+            found.append(f"its instruction names the spec identifier {named.group(0)!r}")
+        return found
+
+    def training_look_alike(self, layout: str) -> str | None:
+        """The training layout that `layout` looks the same as, if any (memoised)."""
+        if layout not in self._look_alike:
+            self._look_alike[layout] = look_alike(self.scene, layout, self.scene.training_layouts)
+        return self._look_alike[layout]
+
+    def level_problems(self, level: str, layout: str, form: str, instruction: str) -> list[str]:
+        same = self.training_look_alike(layout)
+        found = []
+        if level == "L0" and (layout, form) not in self.pairs:
+            found.append("an L0 task is a training pair, but no training task asks this on "
+                         f"{layout}")
+        if level in ("L1", "L3") and same is not None:
+            found.append(f"an {level} task is on a layout that looks different from every "
+                         f"training layout, but {layout} looks the same as {same}")
+        if level == "L1" and instruction not in self.instructions:
+            found.append("an L1 task's instruction is a training instruction, but this one is "
+                         "not")
+        if level == "L2" and same is None:
+            found.append(f"an L2 task is on a training layout, but {layout} looks different "
+                         "from every training layout")
+        return found
+
+
+class SeenTasks:
+    """Test tasks seen so far, to find one that repeats another: the same level and logical
+    form on a layout that looks the same (a task counted twice)."""
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self.seen: dict[tuple[str, str], list[tuple[str, str]]] = {}
+
+    def repeat(self, level: str, layout: str, form: str) -> str | None:
+        for other_layout, other in self.seen.get((level, form), ()):
+            if other_layout == layout or same_observation(self.scene, layout, other_layout):
+                where = ("" if other_layout == layout else
+                         f" ({layout} looks the same as {other_layout})")
+                return f"it repeats {other}: the same meaning on the same layout{where}"
+        return None
+
+    def add(self, task_id: str, level: str, layout: str, form: str) -> None:
+        self.seen.setdefault((level, form), []).append((layout, task_id))
+
+
+@dataclass
+class Examination:
+    findings: list[tuple[str, str]] = field(default_factory=list)  # (kind, message)
+    behaviour: Behaviour | None = None  # grounded on the nominal layout, arms filled
+    unstable: Unstable | None = None  # the first jitter extreme where it means otherwise
+
+
+Arms = Callable[[Behaviour, World], Behaviour]  # fills the arms the words leave unnamed
+
+
+def arms_of(reference: Behaviour) -> Arms:
+    """Unnamed arms taken from `reference`, step for step (a training task's arms, which its
+    paraphrases name, or a compiled task's)."""
+    arms = [s.arm for s in reference.steps]
+
+    def fill(behaviour: Behaviour, _world: World) -> Behaviour:
+        if len(arms) != len(behaviour.steps):
+            return behaviour
+        return behaviour.model_copy(update={"steps": tuple(
+            s if s.arm else s.model_copy(update={"arm": a})
+            for s, a in zip(behaviour.steps, arms, strict=True))})
+    return fill
+
+
+class TaskRules:
+    """The rules of one scene's test tasks (see the module docstring)."""
+
+    def __init__(self, scene: Scene, training: dict[str, Behaviour]):
+        self.scene = scene
+        self.facts = TrainingFacts(scene)
+        self.seen = SeenTasks(scene)
+        self.repertoire = Repertoire(scene, training)
+        self._grounders: dict[str, list[Grounder]] = {}
+
+    def grounders(self, layout: str) -> list[Grounder]:
+        """The layout's grounders: nominal positions first, then the jitter extremes."""
+        if layout not in self._grounders:
+            self._grounders[layout] = [Grounder(w) for w in jitter_worlds(self.scene, layout)]
+        return self._grounders[layout]
+
+    def examine(self, level: str, layout: str, instruction: str, form: lf.Instruction,
+                arms: Arms, every: bool = True) -> Examination:
+        """The rules' findings for one task (every one, or up to the first rule that finds
+        something), and its behaviour as far as it grounds. The task is not remembered:
+        `keep` it once it is kept. The cheap rules come first, the jitter extremes last."""
+        result = Examination()
+        found = result.findings
+        form_json = lf.to_json(form)
+        repeat = self.seen.repeat(level, layout, form_json)
+        if repeat:
+            found.append(("duplicate", repeat))
+        found += [("leakage", m) for m in self.facts.leakage(level, layout, form_json,
+                                                            instruction)]
+        found += [("level", m) for m in self.facts.level_problems(level, layout, form_json,
+                                                                 instruction)]
+        grounders = self.grounders(layout)
+        world = grounders[0].world
+        if found and not every:
+            return result
+        try:
+            nominal = grounders[0].behaviour(form)
+        except GroundingError as error:
+            found.append((grounding_kind(error), grounding_message(error, world)))
+            return result
+        behaviour = result.behaviour = arms(nominal, world)
+        for kind, problems in (
+                ("route", lambda: [p for step in behaviour.steps
+                                   for p in degenerate_routes(step, world)]),
+                ("infeasible", lambda: infeasible(behaviour, world)),
+                ("repertoire", lambda: [m for m in [self.repertoire.missing(
+                    behaviour, world, compose=level in COMPOSING_LEVELS)] if m]),
+                ("wording", lambda: [] if instruction in self.facts.instructions
+                 else wording_problems(instruction, form, grounders[0])),
+                ("ambiguous", lambda: self._unstable(result, form, grounders, nominal))):
+            if found and not every:
+                return result
+            found += [(kind, problem) for problem in problems()]
+        return result
+
+    @staticmethod
+    def _unstable(result: Examination, form: lf.Instruction, grounders: list[Grounder],
+                  nominal: Behaviour) -> list[str]:
+        result.unstable = first_unstable(form, grounders[1:], nominal, first_case=1)
+        return [] if result.unstable is None else [jitter_problem(result.unstable, nominal)]
+
+    def keep(self, task_id: str, level: str, layout: str, form: lf.Instruction) -> None:
+        self.seen.add(task_id, level, layout, lf.to_json(form))
+
+
+def grounding_kind(error: GroundingError) -> str:
+    return "ambiguous" if error.code == "ambiguous" else "no-referent"
+
+
+def grounding_message(error: GroundingError, world: World) -> str:
+    """The error, with the candidates' distances, or what the layout holds of the noun."""
+    if error.code == "ambiguous" and error.candidates:
+        return f"{error.message} ({_distances(error, world)})"
+    if error.code == "no-referent" and error.ref is not None:
+        kinds = sorted({b for b in world.bodies if world.bodies[b].kind == error.ref.noun})
+        there = f"; the layout's {error.ref.noun}s: {', '.join(kinds)}" if kinds else ""
+        return error.message + there
+    return error.message
+
+
+def _distances(error: GroundingError, world: World) -> str:
+    """How far apart the candidates are, by what decided between them."""
+    ref, candidates = error.ref, error.candidates
+    extreme = next((c for c in (ref.constraints if ref else ())
+                    if isinstance(c, lf.ExtremeIs)), None)
+    if extreme is not None:
+        axis, _ = EXTREME_AXES[extreme.extreme]
+        name = "xy"[axis]
+        return ", ".join(f"{b} at {name} = {100 * (world.poses[b].x, world.poses[b].y)[axis]:.1f}"
+                         f" cm" for b in candidates)
+    related = next((c for c in (ref.constraints if ref else ())
+                    if isinstance(c, (lf.NearestIs, lf.Related))), None)
+    if related is not None:
+        try:
+            anchor = world.poses.get(Grounder(world).resolve(related.landmark))  # not the table
+        except GroundingError:
+            anchor = None
+        if anchor is not None:
+            return ", ".join(f"{b} {100 * _apart(world, b, anchor):.1f} cm away"
+                             for b in candidates)
+    return ", ".join(f"{b} at ({100 * world.poses[b].x:.1f}, {100 * world.poses[b].y:.1f}) cm"
+                     for b in candidates)
+
+
+def _apart(world: World, body: str, anchor) -> float:
+    pose = world.poses[body]
+    return math.hypot(pose.x - anchor.x, pose.y - anchor.y)
+
+
+def jitter_problem(unstable: Unstable, nominal: Behaviour) -> str:
+    where = f"at jitter extreme {unstable.case}"
+    error = unstable.error
+    if error is not None:
+        return (f"{where}: {error.message} ({_distances(error, unstable.world)})"
+                if error.candidates else f"{where}: {error.message}")
+    objects = [(s.source, s.target) for s in nominal.steps]
+    return f"{where} it picks {_objects(unstable.objects)} instead of {_objects(objects)}"
+
+
+def _objects(pairs) -> str:
+    return ", ".join("/".join(b for b in pair if b) for pair in pairs)
