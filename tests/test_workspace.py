@@ -53,3 +53,18 @@ def test_the_model_is_conservative_and_close_to_the_arm(expert):
             beyond += 1  # 4 cm or more beyond the model's reach: the arm cannot get there
             assert _error(expert, "left", point) > SOLVED, point
     assert inside > 80 and beyond > 80
+
+
+def test_the_gripper_geometry_is_the_simulated_one(expert):
+    """The finger and palm sizes the compiler's clearance rule uses are the model's boxes."""
+    solver, _ = expert
+    model = solver.iks[0].model
+    finger = model.geom("left/finger_a")
+    palm = model.geom("left/palm")
+    tcp = model.site("left/tcp").pos[0]
+    assert finger.size[1] * 2 == pytest.approx(workspace.FINGER_THICKNESS)
+    assert finger.size[2] * 2 == pytest.approx(workspace.FINGER_WIDTH)
+    assert finger.size[0] * 2 == pytest.approx(workspace.FINGER_LENGTH)
+    assert finger.pos[0] + finger.size[0] - tcp == pytest.approx(workspace.FINGERTIP_DEPTH)
+    assert tuple(palm.size[1:]) == pytest.approx(workspace.PALM_HALF)
+    assert tcp - (palm.pos[0] + palm.size[0]) == pytest.approx(workspace.PALM_RISE)

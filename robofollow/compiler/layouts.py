@@ -16,6 +16,8 @@ from robofollow.compiler.spec_syntax import Coordinates, LayoutNode, LayoutOp
 from robofollow.compiler.workspace import table_bounds
 
 BOWL_FLOOR = 0.005  # m: height of a bowl's inner floor above its bottom
+BOWL_WALL = 0.004  # m: a bowl's wall thickness (its radius is the wall's outside)
+BOWL_SEGMENTS = 16  # flat wall boxes around a bowl (face normals every 360/16 deg from +x)
 
 
 class LayoutResolver:

@@ -27,6 +27,19 @@ REACH = UPPER_ARM + FOREARM - REACH_MARGIN
 MIN_REACH = 0.08  # m
 GRIPPER_OPENING = 0.075  # m: between the open fingers
 GRIP_CLEARANCE = 0.01  # m: a gripped body is at least this much narrower than the opening
+# The fingers and palm as the simulator builds them (sim/robot.py, sim/templates/scene.xml.j2):
+# each finger is a box FINGER_THICKNESS thick along the closing axis whose inner face travels
+# GRIPPER_OPENING / 2 from the grasp centre, FINGER_WIDTH wide across it, its tip FINGERTIP_DEPTH
+# below the grasp centre; the palm is a box PALM_HALF (along, across the closing axis) whose
+# underside is PALM_RISE above the grasp centre.
+FINGER_THICKNESS = 0.006  # m
+FINGER_WIDTH = 0.024  # m
+FINGER_LENGTH = 0.06  # m
+FINGERTIP_DEPTH = 0.012  # m
+PALM_HALF = (0.046, 0.024)  # m
+PALM_RISE = 0.05  # m
+DEFAULT_FRICTION = 0.5  # an object's sliding friction when its spec gives none
+FIXTURE_FRICTION = 0.8  # a fixture's (labels, bowls) sliding friction
 
 
 def table_bounds() -> tuple[float, float, float, float]:

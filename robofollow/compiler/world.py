@@ -170,19 +170,32 @@ def _corner(scene: Scene, body: str, index: tuple[int, int]) -> tuple[float, flo
 
 
 CORNERS = tuple(itertools.product((0, 1), (0, 1)))
+_SIDES = (("low", "high"), ("low", "high"))
 
 
 def corner_worlds(scene: Scene, layout: str) -> list[World]:
     """The layout at nominal positions, then with every body at the same corner of its jitter
     range (four cases)."""
-    bodies = [b for b, p in scene.layouts[layout].placed.items() if p.support is None]
-    return [World(scene, layout)] + [
-        World(scene, layout, {b: _corner(scene, b, c) for b in bodies}) for c in CORNERS]
+    return [world for _, world in jitter_cases(scene, layout, alone=False)]
 
 
 def jitter_worlds(scene: Scene, layout: str) -> list[World]:
     """The corner worlds, then each body alone at each corner of its jitter range."""
+    return [world for _, world in jitter_cases(scene, layout)]
+
+
+def jitter_cases(scene: Scene, layout: str, alone: bool = True) -> list[tuple[str, World]]:
+    """jitter_worlds (corner_worlds without the cases of one body `alone`), each with a
+    description of its case: case i is jitter_worlds(...)[i]."""
     bodies = [b for b, p in scene.layouts[layout].placed.items() if p.support is None]
-    return corner_worlds(scene, layout) + [
-        World(scene, layout, {b: _corner(scene, b, c)}) for b in bodies for c in CORNERS
-        if _corner(scene, b, c) != (0.0, 0.0)]
+    cases = [("the nominal positions", World(scene, layout))]
+    for c in CORNERS:
+        cases.append((f"every body at its {_SIDES[0][c[0]]}-x, {_SIDES[1][c[1]]}-y jitter corner",
+                      World(scene, layout, {b: _corner(scene, b, c) for b in bodies})))
+    for b in bodies if alone else ():
+        for c in CORNERS:
+            dx, dy = _corner(scene, b, c)
+            if (dx, dy) != (0.0, 0.0):
+                cases.append((f"{b} alone moved ({100 * dx:+.1f}, {100 * dy:+.1f}) cm",
+                              World(scene, layout, {b: (dx, dy)})))
+    return cases

@@ -15,14 +15,12 @@ import jinja2
 import numpy as np
 
 from robofollow.compiler import workspace
-from robofollow.compiler.layouts import BOWL_FLOOR
+from robofollow.compiler.layouts import BOWL_FLOOR, BOWL_SEGMENTS, BOWL_WALL
 from robofollow.compiler.spec import TABLE_HEIGHT, Body, Scene
 from robofollow.sim import robot
 from robofollow.sim.assets import ARM_MESHES, mesh_dir
 
 TIMESTEP = 0.002  # s: physics step
-BOWL_WALL = 0.004  # m: bowl wall thickness
-BOWL_SEGMENTS = 16  # wall boxes around a bowl
 SPAWN_LIFT = 0.001  # m: movable objects start this far above their resting height
 
 
@@ -77,7 +75,7 @@ def _object(body: Body, position) -> dict:
     sphere = body.kind == "sphere"
     return {"id": body.id, "pos": _fmt(position), "mass": f"{mass:.6g}", "inertia": _fmt(inertia),
             "type": geom, "size": _fmt(size), "rgba": _rgba(body),
-            "friction": f"{body.friction or 0.5:.6g}", "rolling": "0.002" if sphere else "0.0001",
+            "friction": f"{body.friction or workspace.DEFAULT_FRICTION:.6g}", "rolling": "0.002" if sphere else "0.0001",
             "condim": 6 if sphere else 4}
 
 
@@ -96,7 +94,8 @@ def _fixture(body: Body, position) -> dict:
                           "pos": _fmt((middle * math.cos(angle), middle * math.sin(angle), 0)),
                           "size": _fmt((BOWL_WALL / 2, half_width, hz)),
                           "euler": _fmt((0, 0, angle))})
-    return {"id": body.id, "pos": _fmt(position), "rgba": _rgba(body), "geoms": geoms}
+    return {"id": body.id, "pos": _fmt(position), "rgba": _rgba(body), "geoms": geoms,
+            "friction": f"{workspace.FIXTURE_FRICTION:.6g}"}
 
 
 @lru_cache(maxsize=1)
@@ -129,5 +128,5 @@ def scene_xml(scene: Scene, layout: str, width: int = 320, height: int = 240) ->
         scene=scene.id, layout=layout, mesh_dir=str(mesh_dir()), timestep=TIMESTEP,
         offwidth=max(width, 640), offheight=max(height, 480), meshes=ARM_MESHES,
         table=table, arms=arms, cameras=cameras, arm_joints=robot.ARM_JOINTS,
-        finger_travel=robot.FINGER_TRAVEL, tcp_offset=robot.TCP_OFFSET, finger=robot.FINGER,
+        finger_travel=robot.FINGER_TRAVEL, tcp_offset=robot.TCP_OFFSET, finger=robot.FINGER, palm=robot.PALM,
         wrist_fovy=WRIST_FOVY, objects=objects, fixtures=fixtures)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from robofollow.compiler import workspace
 from robofollow.compiler.workspace import ARMS, GRIPPER_OPENING
 
 ARM_JOINTS = ("waist", "shoulder", "elbow", "forearm_roll", "wrist_angle", "wrist_rotate")
@@ -23,7 +24,15 @@ JOINT_HIGH = np.array([3.14158, 1.25664, 1.6057, 3.14158, 2.23402, 3.14158])
 
 FINGER_TRAVEL = GRIPPER_OPENING / 2  # m: each finger's stroke
 TCP_OFFSET = 0.13  # m: grasp centre (between the finger pads) along the gripper axis
-FINGER = {"x": 0.112, "hx": 0.03, "hy": 0.003, "hz": 0.012}  # m: finger box, gripper frame
+# m: finger box in the gripper frame (x along the gripper, y the closing axis): its tip
+# workspace.FINGERTIP_DEPTH beyond the grasp centre
+FINGER = {"x": round(TCP_OFFSET + workspace.FINGERTIP_DEPTH - workspace.FINGER_LENGTH / 2, 9),
+          "hx": workspace.FINGER_LENGTH / 2, "hy": workspace.FINGER_THICKNESS / 2,
+          "hz": workspace.FINGER_WIDTH / 2}
+# m: the palm box in the gripper frame, its underside workspace.PALM_RISE short of the grasp
+# centre, 4 cm deep
+PALM = {"x": round(TCP_OFFSET - workspace.PALM_RISE - 0.02, 9), "hx": 0.02,
+        "hy": workspace.PALM_HALF[0], "hz": workspace.PALM_HALF[1]}
 
 ACTION_LOW = np.concatenate([JOINT_LOW, [0.0], JOINT_LOW, [0.0]])
 ACTION_HIGH = np.concatenate([JOINT_HIGH, [1.0], JOINT_HIGH, [1.0]])
