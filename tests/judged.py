@@ -117,6 +117,15 @@ class Script:
             self.grip(arm, OPEN).move(arm, (x, y, z + RETREAT), yaw=yaw)
         return self
 
+    def take_again(self, arm: str, body: str, position, yaw: float = 0.0,
+                   lift: float = LIFT, opening: float = OPEN) -> "Script":
+        """Grasp `body` again where it was set down (its centre then at `position`, turned by
+        `yaw`), the fingers coming down `opening` apart, and lift it `lift` metres."""
+        x, y, z = position
+        self.held[arm] = body
+        return (self.move(arm, (x, y, z + PRE_GRASP), opening, yaw).move(arm, (x, y, z), yaw=yaw)
+                .grip(arm, CLOSED).move(arm, (x, y, z + lift), yaw=yaw))
+
     def put_back(self, arm: str) -> "Script":
         """Set the held body down where it was taken from, release, go home."""
         x, y, _ = self.at(self.held[arm])

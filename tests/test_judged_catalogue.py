@@ -9,10 +9,13 @@ gated on earlier ones; every task ends with a 20% finishing stage (refrain from 
 actions unrelated to the instruction); Completion is action-dependent (pickups: final IS and
 ES at least 0.8; other actions: the final state or action progress; Scene 3: the final
 placement-and-orientation stage executed) and does not need every intermediate stage in full.
+Completion is whether the task is done in the episode's final state: an object placed right
+and then taken away again, in any scene, ends the episode not done.
 """
 
 from __future__ import annotations
 
+import math
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -21,11 +24,12 @@ import numpy as np
 import pytest
 
 from robofollow.compiler.behaviour import Behaviour, Step
-from robofollow.compiler.plans import OPEN
+from robofollow.compiler.plans import LIFT, OPEN, PUSH_TRAVEL, PlanPoint, plan, push_points
+from robofollow.compiler.world import World
 from robofollow.eval.episode import run_episode
 from robofollow.eval.reference import REFERENCE_POLICIES
 from robofollow.sim import robot
-from tests.judged import Script, analog, holding_on, released_higher, without
+from tests.judged import Script, analog, holding_on, released_higher, step_of, without
 from tests.sim_helpers import benchmark, episode
 
 
@@ -49,6 +53,7 @@ def at_most(value: float) -> tuple[float, float]:
 
 
 NOTHING = exactly(0.0)
+BOWL_OPENING = 0.7  # fingers 5.3 cm apart: round a 4 cm cube, inside a bowl's 7.2 cm rim
 FULL = exactly(1.0)
 
 S1_PICK = "scene1/L0/pickup_yellow_block_1_left#r1"  # left arm, yellow_block_1
@@ -142,6 +147,61 @@ def beside_yellow(s: Script) -> list[tuple[float, float]]:
     return [(s.at("red_slab")[0], y), (s.at("yellow_slab")[0] + 0.05, y)]
 
 
+def released_at(s: Script) -> PlanPoint:
+    """Where the asked plan lets go of its object."""
+    return next(p for p in plan(s.asked, s.world).points if p.name == "release")
+
+
+def taken_again(s: Script, lift: float = LIFT) -> Script:
+    """Do the task, then grasp the object again where it was let go of and lift it (the
+    fingers coming down narrower into a bowl, whose rim an open gripper would land on)."""
+    point, step = released_at(s), step_of(s.asked)
+    opening = BOWL_OPENING if step.relation == "in" else OPEN
+    return s.perform().take_again(point.arm, step.source, point.position, point.yaw_degrees,
+                                  lift=lift, opening=opening)
+
+
+def placed_then_lifted(above: float):
+    """Do the task, then grasp the object again and hold it `above` metres higher, to the
+    end."""
+    return lambda s: taken_again(s, lift=above)
+
+
+def placed_then_put_back(s: Script) -> Script:
+    """Do the task, then grasp the object again and set it down where it was taken from."""
+    point = released_at(s)
+    x, y, _ = s.at(step_of(s.asked).source)
+    return (taken_again(s).put(point.arm, x, y, yaw=point.yaw_degrees)
+            .home(point.arm, OPEN))
+
+
+def picked_then_put_back(s: Script) -> Script:
+    """Do the pickup, then set the object down where it was taken from."""
+    step = step_of(s.asked)
+    s.perform().held[step.arm] = step.source
+    return s.put_back(step.arm)
+
+
+def pushed_on(direction: tuple[float, float], further: float):
+    """Do the push asked, then push the object again from where that push left it (the
+    planner's travel towards the target), along `direction` and `further` metres longer."""
+    def script(s: Script) -> Script:
+        step = step_of(s.asked)
+        (x, y, z), (tx, ty, _) = s.at(step.source), s.at(step.target)
+        length = math.hypot(tx - x, ty - y)
+        there = (x + (tx - x) / length * PUSH_TRAVEL, y + (ty - y) / length * PUSH_TRAVEL, z)
+        moved = World(s.scene, s.record.layout,
+                      positions={**{b: s.at(b) for b in s.world.poses}, step.source: there})
+        ux, uy = np.divide(direction, math.hypot(*direction))
+        longer = [p.model_copy(update={"position": (p.position[0] + ux * further,
+                                                    p.position[1] + uy * further,
+                                                    p.position[2])})
+                  if p.name in ("push_end", "back_off", "lift") else p
+                  for p in push_points(moved, step.arm, step.source, direction)]
+        return s.perform().points(longer)
+    return script
+
+
 def both_branches(first: str):
     def script(s: Script) -> Script:
         branches = [s.asked, Behaviour(steps=s.asked.other)]
@@ -207,6 +267,15 @@ CASES = [
          lambda s: s.perform().sweep("right", s.at("red_cylinder")[1] + 0.085, 0.22, -0.02),
          exactly(0.8), exactly(0.8), False,
          "placed, then moved again: the finish is lost and the end state is wrong"),
+    Case("s1 placed, then lifted again and held 6 cm above the spot", S1_BEHIND,
+         placed_then_lifted(0.06), exactly(0.8), exactly(0.8), False,
+         "placed right, then taken up again: at the end it is held in the air"),
+    Case("s1 placed, then carried back to where it was taken from", S1_BEHIND,
+         placed_then_put_back, exactly(0.8), exactly(0.8), False,
+         "placed right, then undone: at the end it is not behind the cylinder"),
+    Case("s1 picks up, then sets it down again where it was", S1_PICK, picked_then_put_back,
+         exactly(0.8), exactly(0.8), True,
+         "picked up (complete under the paper's pickup rule), then set down: the finish"),
     Case("s1 held without release over the right spot", S1_BEHIND,
          lambda s: s.perform(edit=holding_on), exactly(0.8), exactly(0.4), False,
          "brought to the right side (Intent) but never let go; carried off again"),
@@ -261,12 +330,24 @@ CASES = [
          put_near("left", "large_blue_cube", "large_red_cylinder", 0.045, 0.0,
                   on="large_red_cylinder", above=0.0), (0.8, 1.0), exactly(0.4), False,
          "aimed at the right target (Intent), did not stay on it (Execution)"),
+    Case("s2 stacked, then lifted again and held 6 cm above the cylinder", S2_STACK,
+         placed_then_lifted(0.06), exactly(0.8), exactly(0.8), False,
+         "stacked right, then taken up again: at the end it is held in the air"),
+    Case("s2 stacked, then carried back to where it was taken from", S2_STACK,
+         placed_then_put_back, exactly(0.8), exactly(0.8), False,
+         "stacked right, then undone: at the end it is not on the cylinder"),
     Case("s2 stacked on the wrong cylinder", S2_STACK,
          lambda s: s.perform(s.variant(target="small_blue_cylinder")), exactly(0.4),
          exactly(0.4), False, "right object, wrong target"),
     Case("s2 dropped into the right bowl from 15 cm", S2_BOWL,
          lambda s: s.perform(edit=released_higher(0.15)), FULL, exactly(0.4), True,
          "the right bowl (Intent), a drop (not Execution); it ends in the bowl (complete)"),
+    Case("s2 put in the bowl, then lifted again and held 6 cm above it", S2_BOWL,
+         placed_then_lifted(0.06), exactly(0.8), exactly(0.8), False,
+         "in the right bowl, then taken up again: at the end it is held in the air"),
+    Case("s2 put in the bowl, then carried back to where it was taken from", S2_BOWL,
+         placed_then_put_back, exactly(0.8), exactly(0.8), False,
+         "in the right bowl, then undone: at the end it is not in the bowl"),
     Case("s2 placed in the wrong bowl", S2_BOWL,
          lambda s: s.perform(s.variant(target="yellow_bowl")), exactly(0.4), exactly(0.4),
          False, "right object, wrong bowl"),
@@ -281,6 +362,9 @@ CASES = [
          lambda s: s.perform(edit=lambda ps: [p.model_copy(update={"gripper": 0.55})
                                               for p in ps]), FULL, NOTHING, True,
          "the right object pushed the right way (Intent), not as a push is done; it moved"),
+    Case("s2 pushed to the cylinder, then pushed 4 cm aside", S2_PUSH,
+         pushed_on((1.0, 0.0), 0.01), exactly(0.8), exactly(0.8), False,
+         "pushed right, then pushed aside: at the end it lies off the way to the target"),
     Case("s2 pushed the wrong way", S2_PUSH,
          lambda s: s.perform(s.variant(target="small_blue_cylinder")), exactly(0.4),
          exactly(0.4), False, "right object, wrong direction"),
@@ -346,6 +430,15 @@ CASES = [
     Case("s3 held without release over the label", S3_VIA,
          lambda s: s.perform(edit=holding_on), exactly(0.8), exactly(0.48), False,
          "route and label right, never let go"),
+    Case("s3 placed, then lifted again and held 6 cm above the label", S3_VIA,
+         placed_then_lifted(0.06), exactly(0.8), exactly(0.8), False,
+         "route and placement right, then taken up again: at the end it is in the air"),
+    Case("s3 placed, then carried back to where it was taken from", S3_VIA,
+         placed_then_put_back, exactly(0.8), exactly(0.8), False,
+         "route and placement right, then undone: at the end it is not on the label"),
+    Case("s3 'avoid red': placed, then lifted again and held above the label", S3_AVOID,
+         placed_then_lifted(0.06), exactly(0.8), exactly(0.8), False,
+         "placed short side right, then taken up again: at the end it is in the air"),
     Case("s3 dropped from 15 cm onto the label", S3_VIA,
          lambda s: s.perform(edit=released_higher(0.15)), FULL, exactly(0.48), False,
          "aimed right; a drop is not a placement, and Scene 3 completes on that stage"),

@@ -9,9 +9,12 @@ import pytest
 from robofollow.compiler import workspace
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.errors import SpecErrors
+from robofollow.scoring import score_recording
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES, Cameras
+from robofollow.sim.mjcf import FLOOR_HEIGHT
 from robofollow.sim.simulation import STABLE_DRIFT, Simulation, UnstableLayoutError
+from tests.judged import Script
 from tests.sim_helpers import benchmark
 
 LAYOUTS = [(s.id, layout) for s in benchmark().spec.scenes.values() for layout in s.layouts]
@@ -91,6 +94,41 @@ def test_an_infeasible_layout_fails_naming_the_object(tmp_path):
     scene = scene.model_copy(update={"layouts": {"edge": beyond}})
     with pytest.raises(UnstableLayoutError, match=r"wobbly/edge is not stable: box moved"):
         Simulation(scene, "edge").reset(0)
+
+
+def test_a_body_knocked_off_the_table_comes_to_rest_on_the_floor_off_the_table():
+    """The floor the table stands on catches what falls off: a block dropped just past the
+    table's right edge after the task lands there, finite and still; only movable objects
+    touch the floor; and the scorer calls the block off the table (the finish is lost, the
+    placement asked for stands)."""
+    script = Script("scene1/L0/place_yellow_block_1_behind_red_cylinder#r1").perform()
+    rollout, sim, body = script.rollout, script.sim, "yellow_block_3"
+    rollout.execute(script.actions)
+    _, y, z = sim.positions()[sim.bodies.index(body)]
+    edge = workspace.TABLE_SIZE[0] / 2
+    at = sim.free_qpos[body]
+    sim.data.qpos[at:at + 3] = (edge + 0.03, y, z + 0.01)  # just past the edge, still high
+    mujoco.mj_forward(sim.model, sim.data)
+    rollout.execute([script.command.copy()] * 100)  # 4 s
+    trajectory = rollout.recorder.trajectory()
+    column = trajectory.bodies.index(body)
+    heights = trajectory.positions[:, column, 2]
+    half = benchmark().spec.scenes["scene1"].bodies[body].half_extents
+    assert np.all(np.isfinite(heights)) and heights.min() > FLOOR_HEIGHT
+    assert heights[-1] == pytest.approx(FLOOR_HEIGHT + half[2], abs=0.003)
+    dof = sim.model.jnt_dofadr[sim.model.joint(body).id]
+    assert np.linalg.norm(sim.data.qvel[dof:dof + 6]) < 0.01  # at rest
+    model, floor = sim.model, sim.model.geom("floor").id
+    movable = {model.body(b).id for b in sim.movable}
+    for geom in range(model.ngeom):  # the robot, the table and the fixtures never touch it
+        touches = (model.geom_contype[geom] & model.geom_conaffinity[floor]
+                   or model.geom_contype[floor] & model.geom_conaffinity[geom])
+        assert bool(touches) == (model.geom_bodyid[geom] in movable), model.geom(geom).name
+    result = score_recording(benchmark(), script.record, trajectory)
+    assert result.complete and result.intent_score == result.execution_score == 0.8
+    finish = result.stages[-1]
+    assert finish.name == "finish" and f"{body} fell off the table" in finish.reason, finish
+    assert f"{body} fell off the table" in result.executed_behaviour.description
 
 
 def _dominant(pixel: np.ndarray) -> str:

@@ -25,6 +25,7 @@ from robofollow.trajectory import ARMS, Trajectory
 
 FULL = 0.99  # a score at least this share of its maximum counts as full credit
 SOURCE_STAGES = ("source_grounding", "push_contact")
+END_STAGES = ("objective", "outcome")  # the stages whose execution geometry is a step's end state
 
 
 def score(behaviour: Behaviour, trajectory: Trajectory, scene: Scene,
@@ -77,12 +78,13 @@ def complete(rec: Recording, behaviour: Behaviour, stages: list[StageResult],
              other_branch: bool = False) -> bool:
     """Completion. Profile 'strict': every stage but the finish executed in full. Profile
     'paper' (the default), action-dependent as the paper defines it: pickups and sequences of
-    pickups need final IS and ES of at least `pickup_complete`; a transfer (Scene 3) needs its
-    placement-and-orientation stage executed (gated); any other action needs each step's end
-    state over the last `final_frames` frames, brought about by its named arm (an object at
-    rest in the asked relation / on / in the target and let go of; a pushed object moved far
-    enough towards the target; a picked object held). A branch asking for nothing is complete
-    when nothing was done; a conditional whose other branch was carried out is not."""
+    pickups need final IS and ES of at least `pickup_complete`; every other action needs each
+    step's end state over the last `final_frames` frames, brought about by its named arm (an
+    object at rest in the asked relation / on / in the target or on the label at the asked
+    yaw, and let go of; a pushed object moved far enough towards the target; a picked object
+    held), and a transfer (Scene 3) its placement-and-orientation stage executed (gated: the
+    route kept) as well. A branch asking for nothing is complete when nothing was done; a
+    conditional whose other branch was carried out is not."""
     if other_branch:
         return False
     if rec.profile.completion == "strict" or not behaviour.steps:
@@ -91,11 +93,11 @@ def complete(rec: Recording, behaviour: Behaviour, stages: list[StageResult],
     if all(step.action == "pick" for step in behaviour.steps):
         least = rec.profile.pickup_complete - 1e-6
         return _total(stages, "intent") >= least and _total(stages, "execution") >= least
-    if any(s.name == "orientation" for s in stages):
-        return next(s for s in stages if s.name == "orientation").execution > 0
+    if any(s.name == "orientation" and not s.execution for s in stages):
+        return False  # a transfer's route and orientation, as its stages ask (gated)
     objectives = {node_id.rpartition(".")[0]: node
                   for node_id, node, _ in scoring_nodes(behaviour, rec.profile)
-                  if node_id.rpartition(".")[2] == "objective"}
+                  if node_id.rpartition(".")[2] in END_STAGES}
     return all(_final_state(rec, step, objectives.get(key)) for key, step in _steps(behaviour))
 
 

@@ -2,7 +2,9 @@
 
 Bodies are placed at their nominal layout positions; an episode moves them to its jittered
 start (see episode.py). Movable objects get a free joint and an explicit inertial; fixtures
-(labels, bowls) are static. A bowl is a floor disk inside a ring of wall boxes.
+(labels, bowls) are static. A bowl is a floor disk inside a ring of wall boxes. The floor the
+table stands on (FLOOR_HEIGHT; a table height is measured from it) catches a body that falls off
+the table; only movable objects collide with it.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from robofollow.sim.assets import ARM_MESHES, mesh_dir
 
 TIMESTEP = 0.002  # s: physics step
 SPAWN_LIFT = 0.001  # m: movable objects start this far above their resting height
+FLOOR_HEIGHT = 0.0  # m: the ground the table stands on (the table top is `table_height` above)
 
 
 @dataclass(frozen=True)
@@ -128,5 +131,6 @@ def scene_xml(scene: Scene, layout: str, width: int = 320, height: int = 240) ->
         scene=scene.id, layout=layout, mesh_dir=str(mesh_dir()), timestep=TIMESTEP,
         offwidth=max(width, 640), offheight=max(height, 480), meshes=ARM_MESHES,
         table=table, arms=arms, cameras=cameras, arm_joints=robot.ARM_JOINTS,
-        finger_travel=robot.FINGER_TRAVEL, tcp_offset=robot.TCP_OFFSET, finger=robot.FINGER, palm=robot.PALM,
-        wrist_fovy=WRIST_FOVY, objects=objects, fixtures=fixtures)
+        finger_travel=robot.FINGER_TRAVEL, tcp_offset=robot.TCP_OFFSET, finger=robot.FINGER,
+        palm=robot.PALM, wrist_fovy=WRIST_FOVY, objects=objects, fixtures=fixtures,
+        floor_height=FLOOR_HEIGHT)
