@@ -6,6 +6,8 @@ an env reads episodes without loading the compiler's passes."""
 
 from __future__ import annotations
 
+from typing import Literal
+
 from pydantic import ConfigDict, Field
 
 from robofollow.compiler import lf
@@ -35,11 +37,15 @@ class EpisodeSetup(Model):
 
 class Episode(EpisodeSetup):
     """A compiled test episode: its task, level and round, the instruction a policy is given
-    and its logical form, and a hash over the spec digest and all of these."""
+    and its logical form, whether an L1/L3 task's motion moved from the trained one, a hash
+    over its scene's digest and all of these (what pairs two runs' episodes), and its scene's
+    split digest (16 hex digits; which version of the split it belongs to)."""
 
     task: str
     level: Level
     instruction: str
     lf: lf.Instruction
     round: int
+    motion: Literal["moved", "as-trained"] | None = None
     hash: str
+    split: str

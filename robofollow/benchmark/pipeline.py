@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 from collections.abc import Mapping
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from pathlib import Path
 from types import MappingProxyType
 
@@ -47,6 +48,18 @@ class Compiled:
     def report(self) -> dict:
         """The audit (entropy, groups, counts, split rules, findings): a fresh copy."""
         return json.loads(self.audit_json)
+
+    @cached_property
+    def split_digests(self) -> Mapping[str, str]:
+        """Each scene's split digest: sha256 over the scene's digest and its test tasks in
+        order, so it changes when, and only when, that scene's tests or what they start from
+        change (never with the scenes compiled beside it)."""
+        digests = {}
+        for scene in self.spec.scenes.values():
+            tasks = [t.model_dump_json() for t in self.splits.tasks if t.scene == scene.id]
+            content = "\n".join([scene.digest, *tasks])
+            digests[scene.id] = hashlib.sha256(content.encode()).hexdigest()
+        return MappingProxyType(digests)
 
     def candidates(self, scene: str) -> dict[str, Behaviour]:
         """The scene's training behaviours by label: what 'did instead' is matched against."""

@@ -17,18 +17,23 @@ from robofollow.files import json_line
 
 def _rounds(compiled: Compiled, task: TestTask) -> Iterator[tuple[Episode, dict]]:
     """Each round of the task's level's split rule: the episode, and its record as the build
-    writes it (the hash covers the spec digest and the rest of the record)."""
-    rule = compiled.spec.scenes[task.scene].splits.get(task.level) or SplitRule(level=task.level)
+    writes it (the hash covers the scene's digest and the rest of the record but the split
+    digest, so an episode keeps its hash while other tasks of its scene change)."""
+    scene = compiled.spec.scenes[task.scene]
+    rule = scene.splits.get(task.level) or SplitRule(level=task.level)
+    split = compiled.split_digests[task.scene][:16]
     first = Episode(id=f"{task.id}#r1", task=task.id, scene=task.scene, level=task.level,
                     layout=task.layout, instruction=task.instruction, lf=task.form,
-                    behaviour=task.behaviour, round=1, seed=0, hash="")
-    common = first.model_dump(mode="json", exclude={"hash"})  # (the rounds differ in 3 fields)
+                    behaviour=task.behaviour, round=1, seed=0, motion=task.motion, hash="",
+                    split=split)
+    common = first.model_dump(mode="json", exclude={"hash", "split"})  # (rounds differ in 3)
     for round_index in range(1, rule.rounds + 1):
         varying = {"episode": f"{task.id}#r{round_index}", "round": round_index,
                    "seed": episode_seed(task.id, round_index, rule.seed)}
         record = {**common, **varying}
-        content = compiled.spec.digest + json_line(record, sort_keys=True)
+        content = scene.digest + json_line(record, sort_keys=True)
         record["hash"] = hashlib.sha256(content.encode()).hexdigest()[:16]
+        record["split"] = split
         yield first.model_copy(update={"id": varying["episode"], "round": round_index,
                                        "seed": varying["seed"], "hash": record["hash"]}), record
 

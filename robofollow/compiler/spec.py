@@ -6,6 +6,8 @@ the world frame (metres): +x to the robot's right, +y away from the robot, +z up
 
 from __future__ import annotations
 
+import hashlib
+
 from typing import Literal
 
 from robofollow.compiler import lf
@@ -158,6 +160,15 @@ class Scene(Model):
 
     def jitter_of(self, body: str) -> Jitter:
         return self.jitter.get(body) or self.jitter.get("*") or Jitter()
+
+    @property
+    def digest(self) -> str:
+        """sha256 over what the scene says (not where: file names and lines are left out), so
+        a scene compiled alone or beside others, from any folder, has one digest."""
+        data = self.model_dump_json(exclude={
+            "tasks": {"__all__": {"source", "paraphrase_sources"}},
+            "tests": {"__all__": {"source"}}})
+        return hashlib.sha256(data.encode()).hexdigest()
 
     @property
     def training_layouts(self) -> tuple[str, ...]:
