@@ -49,7 +49,7 @@ scene routes "Routes" {{
         green_slab  at (-0.02, -0.022)
         green_label at (-0.16, -0.10)
         red_label   at (0.10, -0.18)
-        blue_label  at (0.03, -0.10)
+        blue_label  at (0.01, -0.10)
     }}
     layout swapped from base {{ swap red_slab green_slab }}
     layout sources_swapped from base {{ swap blue_slab yellow_slab }}

@@ -14,6 +14,8 @@ def summary(compiled: Compiled, changes: str = "") -> str:
              f"scene entropy H(T|S) = {report['scene_entropy_bits']:.3f} bits over "
              f"{len(report['groups'])} training scene groups (task labels, as the paper counts); "
              f"over distinct behaviours H(B|S) = {report['behaviour_entropy_bits']:.3f} bits",
+             "split digests: " + ", ".join(f"{scene} {digest[:12]}"
+                                           for scene, digest in compiled.split_digests.items()),
              "", "test tasks per scene and level (each run for the split's rounds):",
              "          " + "".join(f"{level:>6}" for level in LEVELS)]
     for scene, counts in report["counts"].items():

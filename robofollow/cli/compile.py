@@ -20,38 +20,74 @@ def add_compile(commands) -> None:
                     "a bad spec or any audit finding.")
     specs_argument(p)
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
-    p.add_argument("--verify", type=int, nargs="?", const=1, default=0, metavar="ROUNDS",
-                   help="then run the scripted expert on the first ROUNDS rounds (default 1) "
-                        "of every test task in simulation and list the episodes it does not "
-                        "score in full, with the stages lost (exit status 1 if any)")
+    verify = p.add_mutually_exclusive_group()
+    verify.add_argument("--verify", type=int, nargs="?", const=1, default=None, metavar="ROUNDS",
+                        help="run the scripted expert on the first ROUNDS rounds (default 1) of "
+                             "every test task of every scene in simulation and list the "
+                             "episodes it does not score in full, with the stages lost (exit "
+                             "status 1 if any). Without it, the scenes whose split differs from "
+                             "the folder's splits.lock (new or edited scenes) are verified, one "
+                             "round per task")
+    verify.add_argument("--no-verify", action="store_true",
+                        help="skip the simulation check, also for scenes not in splits.lock")
+    p.add_argument("--update-lock", action="store_true",
+                   help="pin every scene's split digest and task counts in SPECS/splits.lock "
+                        "(a clean build only)")
     p.add_argument("--workers", type=int, default=None, metavar="N",
-                   help="simulation workers for --verify (default: the number of CPUs)")
+                   help="simulation workers for verifying (default: the number of CPUs)")
     p.set_defaults(handler=cmd_compile)
 
 
 def cmd_compile(args) -> int:
     from robofollow.benchmark.output import check_out, write
     from robofollow.benchmark.pipeline import clean, compile_specs
+    from robofollow.benchmark.splits_lock import check_lock, lock_path, read_lock, write_lock
     from robofollow.benchmark.summary import summary
 
     check_out(Path(args.out))  # before the work: an --out that cannot take the build is refused
     specs = specs_of(args)
+    lock = lock_path(specs)
+    if args.update_lock and lock is None:
+        raise RoboFollowError("--update-lock needs a specs folder (the lock sits beside the "
+                              "specs)")
+    locked = read_lock(lock)
     compiled = compile_specs(specs)
     changed = write(compiled, Path(args.out))
     print(summary(compiled, changed), end="")
     print(f"written to {args.out}")
-    verified = _verify(compiled, specs, args.verify, args.workers) if args.verify else True
-    return 0 if clean(compiled) and verified else 1
+    check = check_lock(compiled, locked)
+    if check.lines:
+        where = lock if lock is not None and lock.is_file() else "no splits.lock"
+        print(f"\nsplits against {where}:")
+        print("\n".join(f"  {line}" for line in check.lines))
+    elif locked:
+        print(f"\nevery split is the one {lock} pins")
+    if args.verify is not None:
+        verified = _verify(compiled, specs, args.verify, args.workers, tuple(compiled.spec.scenes))
+    elif check.unlocked and not args.no_verify:
+        verified = _verify(compiled, specs, 1, args.workers, check.unlocked)
+    else:
+        verified = True
+    ok = clean(compiled) and verified
+    if args.update_lock and ok:
+        write_lock(lock, compiled)
+        print(f"pinned {len(compiled.spec.scenes)} scenes' splits in {lock}")
+    elif args.update_lock:
+        print(f"{lock} left as it was: the build has findings or failed verification")
+    return 0 if ok else 1
 
 
-def _verify(compiled, specs: Path, rounds: int, workers: int | None) -> bool:
-    """The expert on the first `rounds` rounds of every test task; failures listed."""
+def _verify(compiled, specs: Path, rounds: int, workers: int | None,
+            scenes: tuple[str, ...]) -> bool:
+    """The expert on the first `rounds` rounds of every test task of `scenes`; failures
+    listed."""
     from robofollow.benchmark.rounds import all_episodes
     from robofollow.eval.verify import run_expert_episodes
 
-    episodes = [e for e in all_episodes(compiled) if e.round <= rounds]
-    print(f"\nverifying: the expert on {len(episodes)} episodes ({rounds} round"
-          f"{'s' if rounds > 1 else ''} of every test task) in simulation")
+    episodes = [e for e in all_episodes(compiled) if e.round <= rounds and e.scene in scenes]
+    print(f"\nverifying {', '.join(scenes)}: the expert on {len(episodes)} episodes ({rounds} "
+          f"round{'s' if rounds > 1 else ''} of every test task) in simulation "
+          "(--no-verify skips it)")
     results = run_expert_episodes(specs, episodes, workers or os.cpu_count() or 1)
     failures = [r for r in results if not r["full"]]
     print(f"the expert scored in full on {len(results) - len(failures)} of {len(results)}; "

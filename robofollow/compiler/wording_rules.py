@@ -140,11 +140,15 @@ def clause_problems(tokens: list[WordToken], form: lf.Instruction,
             try:
                 restricted = grounder.compare(comparison_class(ref, constraint, grounder),
                                               constraint, ref)
-                overall = grounder.compare(grounder.domain(ref.noun), constraint, ref)
             except GroundingError:
-                continue
-            if not restricted or not set(restricted) <= set(overall):
+                continue  # the grounding check reports it
+            try:
+                overall = grounder.compare(grounder.domain(ref.noun), constraint, ref)
+            except GroundingError as error:  # a tie: the head noun alone picks no one body
+                overall = list(error.candidates)
+            if not restricted or not set(restricted) <= set(overall) or len(overall) != 1:
                 problems.append(
                     f"clause: '{notation.ref(ref)}' is scored as {', '.join(restricted)}, "
-                    f"but the {constraint.extreme} {ref.noun} is {', '.join(overall)}")
+                    f"but the {constraint.extreme} {ref.noun} is "
+                    f"{' or '.join(overall) or 'no body'}")
     return problems
