@@ -166,3 +166,29 @@ def test_a_capped_level_gives_a_new_layout_its_share_and_displaces_no_more(tmp_p
     new = {t.id for t in after.splits.of("scene1", "L3")}
     gained = [t for t in new - old if "@scene1_4/" in t]
     assert gained and len(new - old) == len(gained) and len(old - new) == len(gained)
+
+
+def test_a_split_asking_for_moved_tasks_keeps_only_moved_l1_and_l3_tasks(tmp_path):
+    """`motion=moved` on L1 rejects the as-trained candidates with the reason; L3 rewords only
+    the kept L1 tasks, so it has no as-trained task either."""
+    from robofollow.benchmark.pipeline import compile_specs
+
+    rule = "split L1 layouts=(scene1_1, scene1_2, scene1_3)"
+    (tmp_path / "scene1.rf").write_text((SPECS / "scene1.rf").read_text())
+    every = compile_specs(tmp_path).splits
+    assert {t.motion for t in every.of("scene1", "L1")} == {"moved", "as-trained"}
+    text = (SPECS / "scene1.rf").read_text()
+    assert rule in text
+    (tmp_path / "scene1.rf").write_text(text.replace(rule, rule + " motion=moved", 1))
+    moved = compile_specs(tmp_path).splits
+    assert moved.of("scene1", "L1") and moved.of("scene1", "L3")
+    assert {t.motion for level in ("L1", "L3") for t in moved.of("scene1", level)} == {"moved"}
+    assert ({t.id for t in moved.of("scene1", "L1")}
+            == {t.id for t in every.of("scene1", "L1") if t.motion == "moved"})
+    as_trained = [r for r in moved.rejected if r.reason.startswith("as-trained:")]
+    assert ({(r.layout, r.origin) for r in as_trained}
+            == {(t.layout, t.origin) for t in every.of("scene1", "L1")
+                if t.motion == "as-trained"})
+    assert all(r.level == "L1" and r.reason == f"as-trained: the expert moves as {r.origin} does"
+               for r in as_trained)
+    assert moved.of("scene1", "L0") == every.of("scene1", "L0")
