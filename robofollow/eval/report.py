@@ -1,5 +1,6 @@
 """Reports of an evaluation run (`RUN/report.md`, `RUN/report.html`) and comparisons of two:
-the paper's Table 1 (with an Intent heatmap in HTML), Intent minus Execution per cell, a
+the paper's Table 1 (with an Intent heatmap in HTML), its L1 and L3 cells for the moved and
+the as-trained tasks beside the whole, Intent minus Execution per cell, a
 per-task table, completion beside what the policy did (per cell, the most frequent confusions
 and the instructed x executed matrix per scene), the stages that failed first with their most
 common reasons, and links to failure videos.
@@ -19,11 +20,11 @@ from pathlib import Path
 import jinja2
 import numpy as np
 
-from robofollow.compiler.spec import LEVELS
+from robofollow.compiler.spec import LEVELS, MOTION_LEVELS
 from robofollow.errors import RoboFollowError
 from robofollow.eval.run_folder import RESULTS, RUN_FILE, read_results
-from robofollow.eval.runner import EvalOptions, summary
-from robofollow.oracle.metrics import METRICS, table
+from robofollow.eval.runner import EvalOptions, summary, with_motion
+from robofollow.oracle.metrics import METRICS, MOTIONS, table
 
 # Every HTML template (`*.html.j2`) escapes what it shows: run records hold text from
 # policies and policy servers (error messages), which must never become markup. No template
@@ -143,6 +144,9 @@ def report_data(name: str, options: EvalOptions, results: list[dict]) -> dict:
     instructions = {r["task"]: text for r in results
                     if (text := r.get("task_instruction") or (
                         r.get("instruction") if options.instruction_mode == "normal" else None))}
+    by_motion = [{"scene": scene, "level": level, "all": row[level], **row[level]["by_motion"]}
+                 for scene, row in cells.items() for level in levels
+                 if level in MOTION_LEVELS and "by_motion" in row.get(level, {})]
     names = task_names(results, instructions)
     full = {task: f"{instructions[task]} ({task})" if task in instructions else task
             for task in names}
@@ -172,7 +176,8 @@ def report_data(name: str, options: EvalOptions, results: list[dict]) -> dict:
             reasons[failed["stage"]][failed["reason"]] += 1
     return {
         "name": name, "options": options, "summary": totals, "levels": levels,
-        "metrics": METRICS, "cells": cells, "tasks": tasks, "names": names, "full": full,
+        "metrics": METRICS, "cells": cells, "by_motion": by_motion, "motions": MOTIONS,
+        "motion_unknown": sum(row["unknown"] for row in by_motion), "tasks": tasks, "names": names, "full": full,
         "instructions": instructions, "did": did, "did_kinds": DID,
         "confusions": confusions.most_common(TOP), "matrices": matrices,
         "first_failures": [{"stage": stage, "episodes": count,
@@ -194,10 +199,12 @@ def _group(results: list[dict], *keys: str) -> dict:
     return grouped
 
 
-def write_report(run: Path) -> tuple[Path, Path]:
-    """(Re)build RUN/report.md and RUN/report.html from the run's results."""
+def write_report(run: Path, motions: dict[str, str | None] | None = None) -> tuple[Path, Path]:
+    """(Re)build RUN/report.md and RUN/report.html from the run's results; `motions` (the
+    compiled episodes' motion, by episode id) fills in the records written before they carried
+    it (else their motion is unknown: "-")."""
     options, results = load_run(run)
-    data = report_data(run.name, options, results)
+    data = report_data(run.name, options, with_motion(results, motions or {}))
     paths = run / "report.md", run / "report.html"
     for path in paths:
         template = _TEMPLATES.get_template(f"report{path.suffix}.j2")
