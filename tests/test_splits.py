@@ -172,15 +172,28 @@ def test_a_split_asking_for_moved_tasks_keeps_only_moved_l1_and_l3_tasks(tmp_pat
     """`motion=moved` on L1 rejects the as-trained candidates with the reason; L3 rewords only
     the kept L1 tasks, so it has no as-trained task either."""
     from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.benchmark.summary import summary
 
     rule = "split L1 layouts=(scene1_1, scene1_2, scene1_3)"
     (tmp_path / "scene1.rf").write_text((SPECS / "scene1.rf").read_text())
-    every = compile_specs(tmp_path).splits
+    compiled = compile_specs(tmp_path)
+    every = compiled.splits
+    text = summary(compiled)
+    assert "L1 and L3 tasks by motion" in text
+    lines = text.splitlines()
+    head = next(i for i, line in enumerate(lines) if "L1 as-trained" in line)
+    counts = lines[head + 1].split()
+    assert counts == ["scene1"] + [str(sum(1 for t in every.of("scene1", level)
+                                           if t.motion == kind))
+                                   for level in ("L1", "L3") for kind in ("moved", "as-trained")]
+    assert counts[1:3] == ["8", "7"]  # the shipped split: 7 of scene1's 15 L1 tasks as trained
     assert {t.motion for t in every.of("scene1", "L1")} == {"moved", "as-trained"}
     text = (SPECS / "scene1.rf").read_text()
     assert rule in text
     (tmp_path / "scene1.rf").write_text(text.replace(rule, rule + " motion=moved", 1))
-    moved = compile_specs(tmp_path).splits
+    compiled = compile_specs(tmp_path)
+    moved = compiled.splits
+    assert "scene1             8               0" in summary(compiled)
     assert moved.of("scene1", "L1") and moved.of("scene1", "L3")
     assert {t.motion for level in ("L1", "L3") for t in moved.of("scene1", level)} == {"moved"}
     assert ({t.id for t in moved.of("scene1", "L1")}

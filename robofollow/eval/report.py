@@ -212,10 +212,14 @@ def write_report(run: Path, motions: dict[str, str | None] | None = None) -> tup
     return paths
 
 
-def comparison(runs: list[Path]) -> str:
-    """Markdown: the runs' Table 1 cells side by side, with B - A differences."""
+def comparison(runs: list[Path], motions: list[dict[str, str | None]] | None = None) -> str:
+    """Markdown: the runs' Table 1 cells side by side, with B - A differences; under each L1
+    and L3 cell, its moved and its as-trained tasks (`motions`, per run, fills in the records
+    written before they carried their task's motion)."""
     loaded = [load_run(run) for run in runs]
-    tables = [table(results) for _, results in loaded]
+    motions = motions or [{} for _ in runs]
+    tables = [table(with_motion(results, found))
+              for (_, results), found in zip(loaded, motions, strict=True)]
     template = _TEMPLATES.get_template("compare.md.j2")
     return template.render(runs=[run.name for run in runs], options=[o for o, _ in loaded],
-                           tables=tables, metrics=METRICS, levels=LEVELS)
+                           tables=tables, metrics=METRICS, levels=LEVELS, motions=MOTIONS)
