@@ -58,9 +58,10 @@ def _motion_rows(row: dict, levels: list[str]) -> list[str]:
                 counts.append(f"{level} {cell['episodes'] if cell else 0}")
         lines.append(f"  {kind:<{LABEL - 2}}" + "".join(f"{v:^{WIDTH}}" for v in values)
                      + f"  ({', '.join(counts)} episodes)")
-    unknown = [f"{level} {row[level].get('by_motion', {}).get('unknown', row[level]['episodes'])}"
-               for level in shown]
-    if any(not text.endswith(" 0") for text in unknown):
-        lines.append(f"{'':<{LABEL}}motion unknown: {', '.join(unknown)} episodes (records written "
+    unknown = {level: row[level].get("by_motion", {}).get("unknown", row[level]["episodes"])
+               for level in shown}
+    if any(unknown.values()):
+        listed = ", ".join(f"{level} {count}" for level, count in unknown.items())
+        lines.append(f"{'':<{LABEL}}motion unknown: {listed} episodes (records written "
                      "before they carried it, or listed tests)")
     return lines
