@@ -97,3 +97,155 @@ def test_two_runs_compare_side_by_side(run, tmp_path, capsys):
 def test_a_folder_without_a_run_is_a_clear_error(tmp_path):
     with pytest.raises(ReportError, match="holds no evaluation run"):
         write_report(tmp_path)
+
+
+# L1: two moved tasks the policy fails, one as-trained task it passes; L3: one of each, the
+# moved one half done. The whole cell is neither subset.
+MOTION_RECORDS = [
+    dict(fake_record("push_left_cube", "L1", 0.0, 0.0, False, None), motion="moved"),
+    dict(fake_record("push_right_cube", "L1", 0.5, 0.25, False, None), motion="moved"),
+    dict(fake_record("pickup_left_cube", "L1", 1.0, 1.0, True, "instructed"),
+         motion="as-trained"),
+    dict(fake_record("pickup_right_cube", "L3", 0.5, 0.5, True, "instructed"), motion="moved"),
+    dict(fake_record("pickup_left_cube", "L3", 1.0, 0.75, True, "instructed"),
+         motion="as-trained"),
+    dict(fake_record("pickup_left_cube", "L0", 1.0, 1.0, True, "instructed"), motion=None),
+]
+
+
+def _write(run: Path, records: list[dict]) -> None:
+    (run / "episodes.jsonl").write_text("".join(json.dumps(r) + "\n" for r in records))
+
+
+def test_l1_and_l3_cells_are_split_into_their_moved_and_as_trained_tasks():
+    cells = report_data("mine", OPTIONS, MOTION_RECORDS)["cells"]["scene2"]
+    assert "by_motion" not in cells["L0"]
+    l1, l3 = cells["L1"], cells["L3"]
+    assert (l1["IS"], l1["ES"], l1["CR"], l1["episodes"]) == (50.0, 41.67, 33.33, 3)  # unchanged
+    moved, trained = l1["by_motion"]["moved"], l1["by_motion"]["as-trained"]
+    assert {k: moved[k] for k in ("IS", "ES", "CR", "episodes", "tasks")} == {
+        "IS": 25.0, "ES": 12.5, "CR": 0.0, "episodes": 2, "tasks": 2}
+    assert {k: trained[k] for k in ("IS", "ES", "CR", "episodes")} == {
+        "IS": 100.0, "ES": 100.0, "CR": 100.0, "episodes": 1}
+    assert l1["by_motion"]["unknown"] == 0
+    assert (l3["by_motion"]["moved"]["ES"], l3["by_motion"]["as-trained"]["ES"]) == (50.0, 75.0)
+
+
+def test_the_printed_table_gives_moved_and_as_trained_rows_with_their_episodes():
+    from robofollow.eval.runner import summary
+    from robofollow.eval.tables import table_text
+
+    lines = table_text(summary(MOTION_RECORDS, OPTIONS)).splitlines()
+    scene = next(i for i, line in enumerate(lines) if line.startswith("scene2"))
+    assert lines[scene].split() == ["scene2", "100.0", "100.0", "100.0", "50.0", "41.7", "33.3",
+                                    "75.0", "62.5", "100.0"]
+    moved, trained = lines[scene + 1], lines[scene + 2]
+    assert moved.split() == ["moved", "25.0", "12.5", "0.0", "50.0", "50.0", "100.0", "(L1",
+                             "2,", "L3", "1", "episodes)"]
+    assert trained.split() == ["as-trained", "100.0", "100.0", "100.0", "100.0", "75.0",
+                               "100.0", "(L1", "1,", "L3", "1", "episodes)"]
+    from robofollow.eval.tables import LABEL, WIDTH
+
+    # the L1 values in the L1 column (the second: levels L0, L1, L3), the L3 ones in the third
+    assert LABEL + WIDTH <= moved.index("25.0") < moved.index("0.0") < LABEL + 2 * WIDTH
+    assert LABEL + 2 * WIDTH <= moved.index("50.0") < LABEL + 3 * WIDTH
+    assert "motion unknown" not in "\n".join(lines)
+
+
+def test_the_reports_give_l1_and_l3_for_both_subsets_beside_the_whole(run):
+    _write(run, MOTION_RECORDS)
+    markdown, html = write_report(run)
+    text = markdown.read_text()
+    assert "### L1 and L3: moved and as-trained tasks" in text
+    assert ("| scene2 | L1 | 50.0 | 41.7 | 33.3 | 3 | 25.0 | 12.5 | 0.0 | 2 | 100.0 | 100.0 "
+            "| 100.0 | 1 |") in text
+    assert ("| scene2 | L3 | 75.0 | 62.5 | 100.0 | 2 | 50.0 | 50.0 | 100.0 | 1 | 100.0 | 75.0 "
+            "| 100.0 | 1 |") in text
+    assert "motion unknown" not in text
+    assert "| scene2 | 100.0 | 100.0 | 100.0 | 50.0 | 41.7 | 33.3 | 75.0 | 62.5 | 100.0 |" in text
+    page = html.read_text()
+    assert ("<tr><td>scene2</td><td>L1</td><td>50.0</td><td>41.7</td><td>33.3</td><td>3</td>"
+            "<td>25.0</td><td>12.5</td><td>0.0</td><td>2</td><td>100.0</td><td>100.0</td>"
+            "<td>100.0</td><td>1</td></tr>") in page
+    summary_cells = json.loads(json.dumps(report_data("mine", OPTIONS, MOTION_RECORDS)[
+        "summary"]))["cells"]["scene2"]
+    assert summary_cells["L3"]["by_motion"]["moved"]["IS"] == 50.0
+
+
+def test_records_without_their_motion_show_it_unknown_or_take_the_compiled_one(run):
+    older = [{k: v for k, v in r.items() if k != "motion"} for r in MOTION_RECORDS]
+    _write(run, older)
+    text = write_report(run)[0].read_text()
+    assert ("| scene2 | L1 | 50.0 | 41.7 | 33.3 | 3 | - | - | - | 0 | - | - | - | 0 | 3 |"
+            in text)
+    from robofollow.eval.runner import summary
+    from robofollow.eval.tables import table_text
+
+    printed = table_text(summary(older, OPTIONS))
+    assert "motion unknown: L1 3, L3 2 episodes" in printed
+    assert [line.split()[:3] for line in printed.splitlines()
+            if line.strip().startswith("moved")] == [["moved", "-", "-"]]
+    motions = {r["episode"]: r["motion"] for r in MOTION_RECORDS}
+    text = write_report(run, motions)[0].read_text()
+    assert ("| scene2 | L1 | 50.0 | 41.7 | 33.3 | 3 | 25.0 | 12.5 | 0.0 | 2 | 100.0 | 100.0 "
+            "| 100.0 | 1 |") in text
+
+
+def test_the_report_command_says_when_it_cannot_tell_the_motion(run, capsys, tmp_path):
+    _write(run, [{k: v for k, v in r.items() if k != "motion"} for r in MOTION_RECORDS])
+    specs = tmp_path / "specs"
+    specs.mkdir()
+    from tests.spec_helpers import VALID
+
+    (specs / "demo.rf").write_text(VALID)
+    assert main(["report", str(run), "--specs", str(specs)]) == 0
+    assert "5 L1/L3 records do not say whether their task's motion moved" in (
+        capsys.readouterr().err)
+    assert "| 3 | - | - | - | 0 | - | - | - | 0 | 3 |" in (run / "report.md").read_text()
+
+
+def test_comparisons_give_the_moved_and_as_trained_rows(run, tmp_path):
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "run.json").write_text(json.dumps(OPTIONS.to_json()))
+    _write(other, [dict(r, intent_score=1.0) for r in MOTION_RECORDS])
+    _write(run, MOTION_RECORDS)
+    text = comparison([run, other])
+    assert "| scene2 | L1 | 50.0 | 100.0 | +50.0 |" in text
+    assert "| scene2 | L1 moved | 25.0 | 100.0 | +75.0 |" in text
+    assert "| scene2 | L1 as-trained | 100.0 | 100.0 | +0.0 |" in text
+    assert "| scene2 | L3 moved | 50.0 | 100.0 | +50.0 |" in text
+    assert "L0 moved" not in text
+
+
+def test_the_report_command_takes_the_motion_of_older_records_from_the_compiled_episodes(
+        tmp_path, monkeypatch):
+    from dataclasses import replace
+
+    from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.benchmark.rounds import all_episodes
+    from robofollow.resources import builtin_specs
+
+    monkeypatch.setenv("ROBOFOLLOW_CACHE_DIR", str(tmp_path / "cache"))
+    specs = tmp_path / "specs"
+    specs.mkdir()
+    (specs / "scene1.rf").write_text((builtin_specs() / "scene1.rf").read_text())
+    compiled = compile_specs(specs)
+    chosen = {}
+    for episode in all_episodes(compiled):
+        if episode.level == "L1" and episode.round == 1:
+            chosen.setdefault(episode.motion, episode)
+    records = []
+    for kind, score in (("moved", 0.0), ("as-trained", 1.0)):
+        episode = chosen[kind]
+        label = episode.task.split("/", 2)[-1]
+        record = fake_record(label, "L1", score, score, bool(score), None)
+        records.append(dict(record, scene="scene1", episode=episode.id, task=episode.task))
+    run = tmp_path / "older"
+    run.mkdir()
+    options = replace(OPTIONS, scenes=("scene1",), spec_digest=compiled.spec.digest)
+    (run / "run.json").write_text(json.dumps(options.to_json()))
+    _write(run, records)
+    assert main(["report", str(run), "--specs", str(specs)]) == 0
+    assert ("| scene1 | L1 | 50.0 | 50.0 | 50.0 | 2 | 0.0 | 0.0 | 0.0 | 1 | 100.0 | 100.0 "
+            "| 100.0 | 1 |") in (run / "report.md").read_text()

@@ -107,6 +107,11 @@ MALFORMED = [
     (edit("split L1 layouts=(swapped)", "split L1 layouts=(swapped) wordings=(rhymes)"),
      "unknown-wording", 17, 42),
     (edit("rounds=10 seed=42", "rounds=0 seed=42"), "bad-value", 17, 39),
+    (edit("layouts=(swapped) rounds", "layouts=(swapped) motion=moevd rounds"), "bad-value",
+     17, 39),
+    (edit("layouts=(swapped) rounds", "layouts=(swapped) motion=(moved) rounds"), "bad-value",
+     17, 32),
+    (edit("split L1", "split L0 motion=moved\n    split L1"), "unknown-attribute", 17, 14),
     (edit("expect pick left red_cube", "expect pick middle red_cube"), "bad-value", 15, 21),
     (edit("expect pick left red_cube", "expect pick left teal_cube"), "unknown-object", 15, 26),
     (edit("Pick up the red cube with", "Pick up the red cubee with"), "instruction-unknown_word",
@@ -135,6 +140,27 @@ def test_malformed_spec_is_reported_at_its_position(tmp_path, text, code, line, 
     assert errors[0].file.endswith("bad.rf")
     rendered = errors[0].render().splitlines()
     assert rendered[0].startswith(f"{errors[0].file}:{line}:{column}: error[{code}]: ")
+
+
+def test_a_split_rule_may_ask_for_moved_tasks_only(tmp_path):
+    (tmp_path / "a.rf").write_text(edit("layouts=(swapped) rounds",
+                                        "layouts=(swapped) motion=moved rounds"))
+    splits = load_spec(tmp_path).scenes["demo"].splits
+    assert splits["L1"].motion == "moved"
+    (tmp_path / "a.rf").write_text(VALID)
+    assert load_spec(tmp_path).scenes["demo"].splits["L1"].motion == "any"
+
+
+def test_a_misspelt_motion_is_located_with_a_suggestion(tmp_path):
+    [error] = errors_of(tmp_path, edit("layouts=(swapped) rounds",
+                                       "layouts=(swapped) motion=moevd rounds"))
+    assert "unknown motion moevd; did you mean moved?" in error.message
+    assert error.render().splitlines()[0].endswith("(known: any | moved: every task, or only "
+                                                   "those whose expert motion differs from the "
+                                                   "training task's)")
+    [error] = errors_of(tmp_path, edit("split L1", "split L2 motion=moved\n    split L1"))
+    assert error.message == ("motion applies to L1 and L3 (the levels on changed layouts), "
+                             "not to L2")
 
 
 def test_every_problem_is_reported_at_once(tmp_path):

@@ -166,3 +166,42 @@ def test_a_capped_level_gives_a_new_layout_its_share_and_displaces_no_more(tmp_p
     new = {t.id for t in after.splits.of("scene1", "L3")}
     gained = [t for t in new - old if "@scene1_4/" in t]
     assert gained and len(new - old) == len(gained) and len(old - new) == len(gained)
+
+
+def test_a_split_asking_for_moved_tasks_keeps_only_moved_l1_and_l3_tasks(tmp_path):
+    """`motion=moved` on L1 rejects the as-trained candidates with the reason; L3 rewords only
+    the kept L1 tasks, so it has no as-trained task either."""
+    from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.benchmark.summary import summary
+
+    rule = "split L1 layouts=(scene1_1, scene1_2, scene1_3)"
+    (tmp_path / "scene1.rf").write_text((SPECS / "scene1.rf").read_text())
+    compiled = compile_specs(tmp_path)
+    every = compiled.splits
+    text = summary(compiled)
+    assert "L1 and L3 tasks by motion" in text
+    lines = text.splitlines()
+    head = next(i for i, line in enumerate(lines) if "L1 as-trained" in line)
+    counts = lines[head + 1].split()
+    assert counts == ["scene1"] + [str(sum(1 for t in every.of("scene1", level)
+                                           if t.motion == kind))
+                                   for level in ("L1", "L3") for kind in ("moved", "as-trained")]
+    assert counts[1:3] == ["8", "7"]  # the shipped split: 7 of scene1's 15 L1 tasks as trained
+    assert {t.motion for t in every.of("scene1", "L1")} == {"moved", "as-trained"}
+    text = (SPECS / "scene1.rf").read_text()
+    assert rule in text
+    (tmp_path / "scene1.rf").write_text(text.replace(rule, rule + " motion=moved", 1))
+    compiled = compile_specs(tmp_path)
+    moved = compiled.splits
+    assert "scene1             8               0" in summary(compiled)
+    assert moved.of("scene1", "L1") and moved.of("scene1", "L3")
+    assert {t.motion for level in ("L1", "L3") for t in moved.of("scene1", level)} == {"moved"}
+    assert ({t.id for t in moved.of("scene1", "L1")}
+            == {t.id for t in every.of("scene1", "L1") if t.motion == "moved"})
+    as_trained = [r for r in moved.rejected if r.reason.startswith("as-trained:")]
+    assert ({(r.layout, r.origin) for r in as_trained}
+            == {(t.layout, t.origin) for t in every.of("scene1", "L1")
+                if t.motion == "as-trained"})
+    assert all(r.level == "L1" and r.reason == f"as-trained: the expert moves as {r.origin} does"
+               for r in as_trained)
+    assert moved.of("scene1", "L0") == every.of("scene1", "L0")

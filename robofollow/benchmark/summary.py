@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from robofollow.audit.splits import FINDING_KEYS
 from robofollow.benchmark.pipeline import Compiled
-from robofollow.compiler.spec import LEVELS
+from robofollow.compiler.spec import LEVELS, MOTION_LEVELS
 
 
 def summary(compiled: Compiled, changes: str = "") -> str:
@@ -20,6 +20,7 @@ def summary(compiled: Compiled, changes: str = "") -> str:
              "          " + "".join(f"{level:>6}" for level in LEVELS)]
     for scene, counts in report["counts"].items():
         lines.append(f"{scene:<10}" + "".join(f"{counts[level]:>6}" for level in LEVELS))
+    lines += _motion_text(compiled)
     lines += _rules_text(report["split_rules"])
     same = report["same_behaviour"]
     lines += ["", f"training tasks with the same behaviour on one layout: {len(same) or 'none'}"]
@@ -31,6 +32,26 @@ def summary(compiled: Compiled, changes: str = "") -> str:
         lines.append(f"{title}: {len(items) or 'none'}")
         lines += [f"  {item['task']}: {item['finding']}" for item in items[:20]]
     return "\n".join(lines) + "\n" + changes
+
+
+def _motion_text(compiled: Compiled) -> list[str]:
+    """Per scene, how many L1 and L3 tasks are moved (the expert moves otherwise than in the
+    training task) and how many as-trained (it moves as trained)."""
+    lines = ["", ("L1 and L3 tasks by motion (moved: the expert moves otherwise than in the "
+                  "training task):"),
+             "          " + "".join(f"{f'{level} moved':>10}{f'{level} as-trained':>16}"
+                                    for level in MOTION_LEVELS)]
+    for scene in compiled.spec.scenes:
+        tasks = [t for t in compiled.splits.tasks if t.scene == scene]
+        counts = [sum(1 for t in tasks if t.level == level and t.motion == kind)
+                  for level in MOTION_LEVELS for kind in ("moved", "as-trained")]
+        lines.append(f"{scene:<10}" + "".join(
+            f"{moved:>10}{trained:>16}" for moved, trained in zip(counts[::2], counts[1::2],
+                                                                  strict=True)))
+    listed = sum(1 for t in compiled.splits.tasks if t.level in MOTION_LEVELS and t.motion is None)
+    if listed:
+        lines.append(f"  (and {listed} listed L1/L3 tests, whose motion is not classified)")
+    return lines
 
 
 def _rules_text(rules: dict) -> list[str]:

@@ -6,10 +6,11 @@ from __future__ import annotations
 import argparse
 import difflib
 import os
+import sys
 from pathlib import Path
 
 from robofollow.cli.common import interrupted, positive, seconds, specs_of, specs_option
-from robofollow.compiler.spec import LEVELS, ROUNDS
+from robofollow.compiler.spec import LEVELS, MOTION_LEVELS, ROUNDS
 from robofollow.errors import RoboFollowError
 from robofollow.eval.deadline import DEFAULT_POLICY_TIMEOUT
 from robofollow.eval.limits import CALL_TIMEOUT_S, MAX_MESSAGE_BYTES
@@ -144,9 +145,13 @@ def add_report(commands) -> None:
         "report", help="rebuild a run's report, or compare two runs",
         description="With one RUN: rebuild RUN/report.md and RUN/report.html from its results. "
                     "With two: their Table 1 cells side by side with the differences "
-                    "(markdown, printed or written to --out).")
+                    "(markdown, printed or written to --out). L1 and L3 are also given for "
+                    "their moved and as-trained tasks; records written before they carried "
+                    "their task's motion take it from the compiled episodes when the specs "
+                    "are the run's (else it is unknown: \"-\").")
     p.add_argument("runs", nargs="+", metavar="RUN", help="one or two run folders")
     p.add_argument("--out", metavar="FILE.md", help="write the comparison here")
+    specs_option(p)
     p.set_defaults(handler=cmd_report)
 
 
@@ -156,14 +161,43 @@ def cmd_report(args) -> int:
     runs = [Path(run) for run in args.runs]
     if len(runs) > 2:
         raise RoboFollowError("report takes one run, or two to compare")
+    motions = [_motions(run, args) for run in runs]
     if len(runs) == 1:
-        markdown, html = write_report(runs[0])
+        markdown, html = write_report(runs[0], motions[0])
         print(f"wrote {markdown} and {html}")
         return 0
-    text = comparison(runs)
+    text = comparison(runs, motions)
     if args.out:
         Path(args.out).write_text(text, encoding="utf-8")
         print(f"wrote {args.out}")
     else:
         print(text)
     return 0
+
+
+def _motions(run: Path, args) -> dict[str, str | None]:
+    """The motion of each L1 / L3 episode of a run whose records do not carry it (written
+    before they did), from the compiled episodes of the specs when they are the run's; else
+    none (their motion is unknown)."""
+    from robofollow.compiled_cache import load
+    from robofollow.compiler.spec_loader import load_spec
+    from robofollow.eval.report import load_run
+
+    options, results = load_run(run)
+    missing = [r["episode"] for r in results if "motion" not in r and r["level"] in MOTION_LEVELS]
+    if not missing:
+        return {}
+    specs = specs_of(args)
+    try:
+        digest = load_spec(specs).digest  # (loading them is quick; compiling is not)
+    except RoboFollowError as error:
+        digest, why = None, f"the specs {specs} do not load ({error.render().splitlines()[0]})"
+    else:
+        why = f"the specs {specs} are not the run's (--specs chooses others)"
+    if digest != options.spec_digest:
+        print(f"{run}: {len(missing)} L1/L3 records do not say whether their task's motion "
+              f"moved, and {why}: shown as unknown", file=sys.stderr)
+        return {}
+    episodes = load(specs)
+    return {episode: episodes.record(episode).motion for episode in missing
+            if episode in episodes.index}

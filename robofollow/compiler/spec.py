@@ -19,6 +19,8 @@ BodyKind = Literal["cube", "slab", "cylinder", "sphere", "label", "bowl"]
 TABLE_HEIGHT = 0.74  # m: the table top's height unless a scene sets it (upstream's)
 Level = Literal["L0", "L1", "L2", "L3"]
 LEVELS: tuple[Level, ...] = ("L0", "L1", "L2", "L3")
+SPLIT_MOTIONS = ("any", "moved")  # a split rule's `motion=`: every task, or moved ones only
+MOTION_LEVELS: tuple[Level, ...] = ("L1", "L3")  # the levels on changed layouts, which take it
 
 # Limits on what a spec may say, checked when it is loaded (each value at its place in the
 # file): physical bounds keep every number something the simulator, the expert and the
@@ -144,6 +146,9 @@ class SplitRule(Model):
     max_tasks: int | None = None
     rounds: int = ROUNDS
     seed: int = 42
+    # L1 / L3: "moved" keeps only tasks whose expert motion differs from the training task's
+    # (an as-trained candidate is rejected); "any" keeps both, the paper's definition
+    motion: Literal["any", "moved"] = "any"
 
 
 class Scene(Model):
@@ -164,10 +169,15 @@ class Scene(Model):
     @property
     def digest(self) -> str:
         """sha256 over what the scene says (not where: file names and lines are left out), so
-        a scene compiled alone or beside others, from any folder, has one digest."""
-        data = self.model_dump_json(exclude={
-            "tasks": {"__all__": {"source", "paraphrase_sources"}},
-            "tests": {"__all__": {"source"}}})
+        a scene compiled alone or beside others, from any folder, has one digest. A split
+        rule's default motion ("any") is left out, as before the attribute existed."""
+        exclude: dict = {"tasks": {"__all__": {"source", "paraphrase_sources"}},
+                         "tests": {"__all__": {"source"}}}
+        defaults = {level: {"motion"} for level, rule in self.splits.items()
+                    if rule.motion == "any"}
+        if defaults:
+            exclude["splits"] = defaults
+        data = self.model_dump_json(exclude=exclude)
         return hashlib.sha256(data.encode()).hexdigest()
 
     @property

@@ -15,6 +15,7 @@ as spec_checks.py does).
 
 from __future__ import annotations
 
+import difflib
 import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -36,7 +37,9 @@ from robofollow.compiler.spec import (
     MAX_ROUNDS,
     MAX_SEED,
     MAX_TASKS,
+    MOTION_LEVELS,
     RGB_RANGE,
+    SPLIT_MOTIONS,
     TABLE_HEIGHT,
     TABLE_HEIGHT_RANGE,
     YAW_RANGE,
@@ -445,7 +448,7 @@ class _Loader(Checks):
 
     def split(self, item: SplitNode, layouts: set[str]) -> SplitRule:
         found = self.attributes(item.attributes,
-                                ("layouts", "wordings", "max", "rounds", "seed"))
+                                ("layouts", "wordings", "max", "rounds", "seed", "motion"))
         values: dict = {"level": str(item.level)}
         for key in ("layouts", "wordings"):
             if key in found:
@@ -468,4 +471,28 @@ class _Loader(Checks):
                 number = self.number(found[key], bounds, whole=True)
                 if number is not None:
                     values[name] = int(number)
+        if "motion" in found:
+            motion = self.split_motion(found["motion"], str(item.level))
+            if motion is not None:
+                values["motion"] = motion
         return SplitRule(**values)
+
+    def split_motion(self, node: Attribute, level: str) -> str | None:
+        """A split rule's `motion=`: one of SPLIT_MOTIONS, on a level of changed layouts."""
+        if level not in MOTION_LEVELS:
+            self.error("unknown-attribute", f"motion applies to {' and '.join(MOTION_LEVELS)} "
+                       f"(the levels on changed layouts), not to {level}", node.key)
+            return None
+        known = " | ".join(SPLIT_MOTIONS)
+        if not isinstance(node.value, Name):
+            self.error("bad-value", f"motion takes a name: motion={known}", node.key)
+            return None
+        token = node.value.token
+        if token not in SPLIT_MOTIONS:
+            close = difflib.get_close_matches(str(token), SPLIT_MOTIONS, n=1, cutoff=0.5)
+            hint = f"did you mean {close[0]}? " if close else ""
+            self.error("bad-value", f"unknown motion {token!s}; {hint}(known: {known}: every "
+                       "task, or only those whose expert motion differs from the training "
+                       "task's)", token)
+            return None
+        return str(token)

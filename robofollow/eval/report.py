@@ -1,5 +1,6 @@
 """Reports of an evaluation run (`RUN/report.md`, `RUN/report.html`) and comparisons of two:
-the paper's Table 1 (with an Intent heatmap in HTML), Intent minus Execution per cell, a
+the paper's Table 1 (with an Intent heatmap in HTML), its L1 and L3 cells for the moved and
+the as-trained tasks beside the whole, Intent minus Execution per cell, a
 per-task table, completion beside what the policy did (per cell, the most frequent confusions
 and the instructed x executed matrix per scene), the stages that failed first with their most
 common reasons, and links to failure videos.
@@ -19,11 +20,11 @@ from pathlib import Path
 import jinja2
 import numpy as np
 
-from robofollow.compiler.spec import LEVELS
+from robofollow.compiler.spec import LEVELS, MOTION_LEVELS
 from robofollow.errors import RoboFollowError
 from robofollow.eval.run_folder import RESULTS, RUN_FILE, read_results
-from robofollow.eval.runner import EvalOptions, summary
-from robofollow.oracle.metrics import METRICS, table
+from robofollow.eval.runner import EvalOptions, summary, with_motion
+from robofollow.oracle.metrics import METRICS, MOTIONS, table
 
 # Every HTML template (`*.html.j2`) escapes what it shows: run records hold text from
 # policies and policy servers (error messages), which must never become markup. No template
@@ -143,6 +144,9 @@ def report_data(name: str, options: EvalOptions, results: list[dict]) -> dict:
     instructions = {r["task"]: text for r in results
                     if (text := r.get("task_instruction") or (
                         r.get("instruction") if options.instruction_mode == "normal" else None))}
+    by_motion = [{"scene": scene, "level": level, "all": row[level], **row[level]["by_motion"]}
+                 for scene, row in cells.items() for level in levels
+                 if level in MOTION_LEVELS and "by_motion" in row.get(level, {})]
     names = task_names(results, instructions)
     full = {task: f"{instructions[task]} ({task})" if task in instructions else task
             for task in names}
@@ -172,7 +176,8 @@ def report_data(name: str, options: EvalOptions, results: list[dict]) -> dict:
             reasons[failed["stage"]][failed["reason"]] += 1
     return {
         "name": name, "options": options, "summary": totals, "levels": levels,
-        "metrics": METRICS, "cells": cells, "tasks": tasks, "names": names, "full": full,
+        "metrics": METRICS, "cells": cells, "by_motion": by_motion, "motions": MOTIONS,
+        "motion_unknown": sum(row["unknown"] for row in by_motion), "tasks": tasks, "names": names, "full": full,
         "instructions": instructions, "did": did, "did_kinds": DID,
         "confusions": confusions.most_common(TOP), "matrices": matrices,
         "first_failures": [{"stage": stage, "episodes": count,
@@ -194,10 +199,12 @@ def _group(results: list[dict], *keys: str) -> dict:
     return grouped
 
 
-def write_report(run: Path) -> tuple[Path, Path]:
-    """(Re)build RUN/report.md and RUN/report.html from the run's results."""
+def write_report(run: Path, motions: dict[str, str | None] | None = None) -> tuple[Path, Path]:
+    """(Re)build RUN/report.md and RUN/report.html from the run's results; `motions` (the
+    compiled episodes' motion, by episode id) fills in the records written before they carried
+    it (else their motion is unknown: "-")."""
     options, results = load_run(run)
-    data = report_data(run.name, options, results)
+    data = report_data(run.name, options, with_motion(results, motions or {}))
     paths = run / "report.md", run / "report.html"
     for path in paths:
         template = _TEMPLATES.get_template(f"report{path.suffix}.j2")
@@ -205,10 +212,14 @@ def write_report(run: Path) -> tuple[Path, Path]:
     return paths
 
 
-def comparison(runs: list[Path]) -> str:
-    """Markdown: the runs' Table 1 cells side by side, with B - A differences."""
+def comparison(runs: list[Path], motions: list[dict[str, str | None]] | None = None) -> str:
+    """Markdown: the runs' Table 1 cells side by side, with B - A differences; under each L1
+    and L3 cell, its moved and its as-trained tasks (`motions`, per run, fills in the records
+    written before they carried their task's motion)."""
     loaded = [load_run(run) for run in runs]
-    tables = [table(results) for _, results in loaded]
+    motions = motions or [{} for _ in runs]
+    tables = [table(with_motion(results, found))
+              for (_, results), found in zip(loaded, motions, strict=True)]
     template = _TEMPLATES.get_template("compare.md.j2")
     return template.render(runs=[run.name for run in runs], options=[o for o, _ in loaded],
-                           tables=tables, metrics=METRICS, levels=LEVELS)
+                           tables=tables, metrics=METRICS, levels=LEVELS, motions=MOTIONS)

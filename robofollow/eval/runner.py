@@ -7,8 +7,9 @@ RUN/episodes.jsonl  one line per finished episode, appended as episodes finish (
                     whole record, or an episode already recorded) stops --resume with its
                     line number; --drop-corrupt moves such lines to episodes.jsonl.dropped
 RUN/summary.json    the paper's Table 1 over every line: cells and avg (0-100), the chance and
-                    followed-instruction references, and the episodes that ended in a policy
-                    failure
+                    followed-instruction references, L1 and L3 cells split by motion (moved /
+                    as-trained; records written before they carried it take it from the
+                    compiled episode), and the episodes that ended in a policy failure
 RUN/videos/         mp4s of failed (or all) episodes, with --video
 RUN/.lock           held (flock) while a run uses the folder: a second run on it stops at once;
                     the lock of a killed run goes with its process
@@ -25,6 +26,7 @@ from __future__ import annotations
 import hashlib
 import re
 from collections import Counter
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from functools import partial
 from pathlib import Path
@@ -121,7 +123,7 @@ def result_record(episode: Episode, instruction: str, run: EpisodeRun) -> dict:
     return {
         "episode": episode.id, "scene": episode.scene, "level": episode.level,
         "task": episode.task, "layout": episode.layout, "round": episode.round,
-        "seed": episode.seed, "instruction": instruction, **own,
+        "motion": episode.motion, "seed": episode.seed, "instruction": instruction, **own,
         "intent_score": score.intent_score, "execution_score": score.execution_score,
         "complete": score.complete, "other_branch": score.other_branch,
         "stages": [s.model_dump(mode="json") for s in score.stages],
@@ -219,6 +221,14 @@ def _failure_reason(error: str) -> str:
     return re.sub(r"^(step \d+|reset): ", "", error)
 
 
+def with_motion(results: list[dict], motions: Mapping[str, str | None]) -> list[dict]:
+    """The records, each with its task's motion (moved / as-trained, None at L0 and L2): its
+    own, else its compiled episode's (`motions`, by episode id) for records written before
+    they carried it; a record with neither is left as it is (its motion unknown)."""
+    return [record if "motion" in record or record["episode"] not in motions
+            else dict(record, motion=motions[record["episode"]]) for record in results]
+
+
 def summary(results: list[dict], options: EvalOptions) -> dict:
     ordered = sorted(results, key=lambda r: r["episode"])  # same sums in any finishing order
     reasons = Counter(_failure_reason(r["error"]) for r in ordered if r.get("error"))
@@ -275,6 +285,6 @@ def evaluate(compiled: Compiled, out: Path, options: EvalOptions, workers: int =
                 raise EvalPolicyError(f"--policy {options.policy!r}: {error}") from None
             finally:
                 lost.close()
-        result = summary(finished, options)
+        result = summary(with_motion(finished, {e.id: e.motion for e in episodes}), options)
         write_json(out / SUMMARY, result)
     return result

@@ -9,6 +9,12 @@ for CR (binary outcomes; with equal rounds per task the macro average is the epi
 proportion), and conservative for IS and ES (per-episode scores in [0, 1] with mean p have a
 variance of at most p (1 - p), the binomial one).
 
+L1 and L3 cells also split their episodes by the task's motion ("by_motion"): "moved" (the
+expert moves otherwise than in the training task) and "as-trained" (it moves as trained; a
+policy that replays the trained motion for the trained sentence passes these), each with IS,
+ES, CR and its episode and task counts (None where the cell has none), and "unknown": the
+episodes whose records do not say (written before records carried it, or a listed test).
+
 Episodes that carry references (an evaluation's `chance` and `followed_intent`) add their means
 to each cell: chance_IS / chance_CR (a language-blind guess) and followed_IS (perfectly
 following the instruction given), and their averages under "references".
@@ -21,7 +27,10 @@ from collections.abc import Iterable, Mapping
 
 import numpy as np
 
+from robofollow.compiler.spec import MOTION_LEVELS
+
 METRICS = ("IS", "ES", "CR")
+MOTIONS = ("moved", "as-trained")  # an L1 / L3 task's motion, against its training task's
 REFERENCES = ("chance_IS", "chance_CR", "followed_IS")  # when the episodes carry them
 
 
@@ -34,23 +43,37 @@ def table(results: Iterable[Mapping]) -> dict:
         grouped[result["scene"], result["level"]].append(result)
     cells: dict[str, dict[str, dict]] = {}
     for (scene, level), episodes in sorted(grouped.items()):
-        tasks: dict[str, list[bool]] = defaultdict(list)
-        for e in episodes:
-            tasks[e["task"]].append(bool(e["complete"]))
-        cells.setdefault(scene, {})[level] = {
-            "IS": _percent(e["intent_score"] for e in episodes),
-            "ES": _percent(e["execution_score"] for e in episodes),
-            "CR": _percent(np.mean(done) for done in tasks.values()),
-            "CR_micro": _percent(e["complete"] for e in episodes),
-            "episodes": len(episodes), "tasks": len(tasks), **_references(episodes)}
+        cells.setdefault(scene, {})[level] = {**_scores(episodes), **_references(episodes)}
         cell = cells[scene][level]
         cell["ci95"] = {m: wilson(cell[m] / 100, len(episodes)) for m in METRICS}
+        if level in MOTION_LEVELS:
+            cell["by_motion"] = by_motion(episodes)
     flat = [cell for levels in cells.values() for cell in levels.values()]
     averages = {"avg": {m: _mean(flat, m) for m in METRICS}}
     shown = [m for m in REFERENCES if flat and all(m in c for c in flat)]
     if shown:
         averages["references"] = {m: _mean(flat, m) for m in shown}
     return {"cells": cells, **averages}
+
+
+def _scores(episodes: list[Mapping]) -> dict:
+    """IS, ES, CR (task macro average), CR_micro and the episode and task counts."""
+    tasks: dict[str, list[bool]] = defaultdict(list)
+    for e in episodes:
+        tasks[e["task"]].append(bool(e["complete"]))
+    return {"IS": _percent(e["intent_score"] for e in episodes),
+            "ES": _percent(e["execution_score"] for e in episodes),
+            "CR": _percent(np.mean(done) for done in tasks.values()),
+            "CR_micro": _percent(e["complete"] for e in episodes),
+            "episodes": len(episodes), "tasks": len(tasks)}
+
+
+def by_motion(episodes: list[Mapping]) -> dict:
+    """A cell's episodes split by their task's motion: {"moved": scores or None,
+    "as-trained": scores or None, "unknown": the episodes whose record does not say}."""
+    split = {kind: [e for e in episodes if e.get("motion") == kind] for kind in MOTIONS}
+    return {**{kind: _scores(subset) if subset else None for kind, subset in split.items()},
+            "unknown": len(episodes) - sum(len(subset) for subset in split.values())}
 
 
 def wilson(proportion: float, n: int, z: float = 1.959964) -> list[float]:
