@@ -14,7 +14,8 @@ from robofollow.resources import builtin_specs
 from tests.spec_helpers import edit
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
-TARGETS = {"scene1": [16, 8, 16, 76], "scene2": [16, 24, 68, 24], "scene3": [16, 40, 64, 96],
+# the upstream benchmark's tasks per level, but Scene 1's L3 (see tests/test_splits.py)
+TARGETS = {"scene1": [16, 8, 16, 17], "scene2": [16, 24, 68, 24], "scene3": [16, 40, 64, 96],
            "scene4": [27, 14, 25, 24]}
 
 
@@ -82,8 +83,11 @@ def test_bad_specs_are_reported_with_positions_and_exit_1(tmp_path, capsys):
 
 
 def test_injected_leaks_are_caught():
-    from robofollow.audit.splits import leakage
+    from robofollow.audit.splits import task_findings
     from robofollow.benchmark.pipeline import compile_specs
+
+    def leakage(spec, splits):
+        return task_findings(spec, compiled.training, splits)["leakage"]
 
     compiled = compile_specs(SPECS)
     spec, splits = compiled.spec, compiled.splits
