@@ -31,16 +31,22 @@ def write_jsonl(path: Path, records) -> None:
         f.writelines(json_line(r) for r in records)
 
 
-def write_json_atomic(path: Path, data) -> None:
+def write_bytes_atomic(path: Path, data: bytes) -> None:
     """Write through a temporary file and rename: readers see the old file or the new one
     (and a write that fails, e.g. on a full disk, leaves no temporary file behind)."""
     partial = path.with_name(path.name + ".partial")
     try:
-        write_json(partial, data)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        partial.write_bytes(data)
         os.replace(partial, path)
     except BaseException:
         partial.unlink(missing_ok=True)
         raise
+
+
+def write_json_atomic(path: Path, data) -> None:
+    """JSON written atomically (write_bytes_atomic), as write_json writes it."""
+    write_bytes_atomic(path, (json.dumps(data, indent=2) + "\n").encode())
 
 
 def link_or_copy(source: Path, target: Path) -> None:

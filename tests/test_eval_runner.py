@@ -14,6 +14,7 @@ from pathlib import Path
 import pytest
 
 from robofollow.cli import main
+from robofollow.eval.scores import SCORES, read_scores, write_scores
 from robofollow.eval.instructions import given_instruction
 from robofollow.eval.loading import PolicyLoadError, load_policy
 from robofollow.eval.runner import (
@@ -65,7 +66,15 @@ def test_the_expert_run_records_every_episode_and_scores_in_full(expert_run):
     assert "task_instruction" not in record  # only where another instruction was given
     first = record["stages"][0]
     assert first["intent"] == first["execution"] == first["weight"] and set(record["hashes"]) == {
-        "episode", "instruction", "initial_state"}
+        "episode", "split", "instruction", "initial_state"}
+    assert summary["splits"] == {SCENE: [benchmark().split_digests[SCENE][:16]]}
+    scores = read_scores(expert_run / SCORES)
+    assert [row["episode"] for row in scores] == sorted(r["episode"] for r in results)
+    assert all(row["intent"] == row["execution"] == 1.0 and row["complete"] for row in scores)
+    assert {row["hash"] for row in scores} == {r["hashes"]["episode"] for r in results}
+    again = expert_run.parent / "again.csv.gz"
+    write_scores(again, list(reversed(results)))  # the same bytes in any finishing order
+    assert again.read_bytes() == (expert_run / SCORES).read_bytes()
 
 
 @pytest.mark.slow

@@ -6,6 +6,8 @@ RUN/episodes.jsonl  one line per finished episode, appended as episodes finish (
                     so every finished episode is kept exactly once). A corrupt line (not a
                     whole record, or an episode already recorded) stops --resume with its
                     line number; --drop-corrupt moves such lines to episodes.jsonl.dropped
+RUN/scores.csv.gz   every episode's id, hash, split digest, motion, IS, ES and completion
+                    (eval/scores.py): what a later run is compared with, episode by episode
 RUN/summary.json    the paper's Table 1 over every line: cells and avg (0-100), the chance and
                     followed-instruction references, L1 and L3 cells split by motion (moved /
                     as-trained; records written before they carried it take it from the
@@ -56,6 +58,7 @@ from robofollow.eval.run_folder import (
     run_lock,
     write_json,
 )
+from robofollow.eval.scores import SCORES, write_scores
 from robofollow.oracle.metrics import table
 from robofollow.sim.cameras import side_by_side
 from robofollow.sim.simulation import CONTROL_HZ
@@ -131,7 +134,8 @@ def result_record(episode: Episode, instruction: str, run: EpisodeRun) -> dict:
                                if score.executed_behaviour else None),
         "steps": run.steps, "queries": run.queries, "clipped": run.clipped, "error": run.error,
         "seconds": round(run.seconds, 3),
-        "hashes": {"episode": episode.hash, "instruction": _digest(instruction.encode()),
+        "hashes": {"episode": episode.hash, "split": episode.split,
+                   "instruction": _digest(instruction.encode()),
                    "initial_state": _digest(start)}}
 
 
@@ -232,8 +236,14 @@ def with_motion(results: list[dict], motions: Mapping[str, str | None]) -> list[
 def summary(results: list[dict], options: EvalOptions) -> dict:
     ordered = sorted(results, key=lambda r: r["episode"])  # same sums in any finishing order
     reasons = Counter(_failure_reason(r["error"]) for r in ordered if r.get("error"))
+    splits: dict[str, set] = {}
+    for record in ordered:
+        splits.setdefault(record["scene"], set()).add(record.get("hashes", {}).get("split"))
     return {"policy": options.policy, "instruction_mode": options.instruction_mode,
-            "episodes": len(results), **table(ordered),
+            "episodes": len(results),
+            "splits": {scene: sorted(d for d in digests if d) for scene, digests in
+                       splits.items()},  # each scene's split digest (records that carry one)
+            **table(ordered),
             "policy_failures": {"episodes": sum(reasons.values()),
                                 "reasons": dict(reasons.most_common(5))}}
 
@@ -285,6 +295,8 @@ def evaluate(compiled: Compiled, out: Path, options: EvalOptions, workers: int =
                 raise EvalPolicyError(f"--policy {options.policy!r}: {error}") from None
             finally:
                 lost.close()
-        result = summary(with_motion(finished, {e.id: e.motion for e in episodes}), options)
+        finished = with_motion(finished, {e.id: e.motion for e in episodes})
+        result = summary(finished, options)
         write_json(out / SUMMARY, result)
+        write_scores(out / SCORES, finished)
     return result
