@@ -86,6 +86,6 @@ def test_compile_verify_lists_what_only_simulation_finds(capsys, tmp_path):
     status, out, _ = run(capsys, "compile", str(tmp_path / "specs"), "--out",
                          str(tmp_path / "build"), "--verify", "--workers", "1")
     assert status == 1
-    assert "verifying: the expert on 2 episodes (1 round of every test task)" in out
+    assert "the expert on 2 episodes (1 round of every test task)" in out
     assert "the expert scored in full on 1 of 2; failures: 1" in out
     assert "tiny/L0/pick_blue#r1: source: grasped blue_cube" in out and "but lifted it" in out

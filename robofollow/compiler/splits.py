@@ -118,8 +118,8 @@ class _Generator:
                  origin: str, wording: str, task_id: str | None = None) -> bool:
         """Keep the candidate as a test task, or reject it with the first rule it breaks;
         whether kept."""
-        examined = self.rules.examine(level, layout, instruction, form, arms_of(self.training[origin]),
-                                      every=False)
+        examined = self.rules.examine(level, layout, instruction, form,
+                                      arms_of(self.training[origin]), every=False)
         if examined.findings:
             kind, message = examined.findings[0]
             self.reject(level, layout, instruction, origin, f"{kind}: {message}")

@@ -119,7 +119,21 @@ class SeenTasks:
 class Examination:
     findings: list[tuple[str, str]] = field(default_factory=list)  # (kind, message)
     behaviour: Behaviour | None = None  # grounded on the nominal layout, arms filled
-    unstable: Unstable | None = None  # the first jitter extreme where it means otherwise
+
+
+@dataclass(frozen=True)
+class _Grounded:
+    """A task that grounds on its layout's nominal positions, for the rules after that."""
+    level: str
+    instruction: str
+    form: lf.Instruction
+    nominal: Behaviour  # as the words give it
+    behaviour: Behaviour  # arms filled
+    grounders: list[Grounder]  # nominal first, then the jitter extremes
+
+    @property
+    def world(self) -> World:
+        return self.grounders[0].world
 
 
 Arms = Callable[[Behaviour, World], Behaviour]  # fills the arms the words leave unnamed
@@ -179,26 +193,33 @@ class TaskRules:
         except GroundingError as error:
             found.append((grounding_kind(error), grounding_message(error, world)))
             return result
-        behaviour = result.behaviour = arms(nominal, world)
-        for kind, problems in (
-                ("route", lambda: [p for step in behaviour.steps
-                                   for p in degenerate_routes(step, world)]),
-                ("infeasible", lambda: infeasible(behaviour, world)),
-                ("repertoire", lambda: [m for m in [self.repertoire.missing(
-                    behaviour, world, compose=level in COMPOSING_LEVELS)] if m]),
-                ("wording", lambda: [] if instruction in self.facts.instructions
-                 else wording_problems(instruction, form, grounders[0])),
-                ("ambiguous", lambda: self._unstable(result, form, grounders, nominal))):
+        result.behaviour = arms(nominal, world)
+        task = _Grounded(level, instruction, form, nominal, result.behaviour, grounders)
+        for kind, rule in _GROUNDED_RULES:
             if found and not every:
-                return result
-            found += [(kind, problem) for problem in problems()]
+                break
+            found += [(kind, problem) for problem in rule(self, task)]
         return result
 
-    @staticmethod
-    def _unstable(result: Examination, form: lf.Instruction, grounders: list[Grounder],
-                  nominal: Behaviour) -> list[str]:
-        result.unstable = first_unstable(form, grounders[1:], nominal, first_case=1)
-        return [] if result.unstable is None else [jitter_problem(result.unstable, nominal)]
+    def _routes(self, task: _Grounded) -> list[str]:
+        return [p for step in task.behaviour.steps for p in degenerate_routes(step, task.world)]
+
+    def _feasibility(self, task: _Grounded) -> list[str]:
+        return infeasible(task.behaviour, task.world)
+
+    def _repertoire(self, task: _Grounded) -> list[str]:
+        missing = self.repertoire.missing(task.behaviour, task.world,
+                                          compose=task.level in COMPOSING_LEVELS)
+        return [missing] if missing else []
+
+    def _wording(self, task: _Grounded) -> list[str]:
+        if task.instruction in self.facts.instructions:
+            return []  # a training instruction: the spec author's words
+        return wording_problems(task.instruction, task.form, task.grounders[0])
+
+    def _jitter(self, task: _Grounded) -> list[str]:
+        unstable = first_unstable(task.form, task.grounders[1:], task.nominal, first_case=1)
+        return [] if unstable is None else [jitter_problem(unstable, task.nominal)]
 
     def keep(self, task_id: str, level: str, layout: str, form: lf.Instruction) -> None:
         self.seen.add(task_id, level, layout, lf.to_json(form))
@@ -260,3 +281,9 @@ def jitter_problem(unstable: Unstable, nominal: Behaviour) -> str:
 
 def _objects(pairs) -> str:
     return ", ".join("/".join(b for b in pair if b) for pair in pairs)
+
+
+# the rules on a grounded task, in order (cheap first): (finding kind, rule)
+_GROUNDED_RULES = (("route", TaskRules._routes), ("infeasible", TaskRules._feasibility),
+                   ("repertoire", TaskRules._repertoire), ("wording", TaskRules._wording),
+                   ("ambiguous", TaskRules._jitter))
