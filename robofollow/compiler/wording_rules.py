@@ -28,6 +28,7 @@ from pydantic import BaseModel
 from robofollow.compiler import lf, notation
 from robofollow.compiler.grounding import Grounder, GroundingError
 from robofollow.compiler.lexicon import WordToken, tokenize
+from robofollow.errors import InstructionError
 
 # English premodifier order: lower ranks come first
 _RANKS = {"ORDINAL": 0, "MIDDLE": 0, "EXTREME": 0, "LEFT": 0, "RIGHT": 0, "FRONT": 0,
@@ -38,8 +39,12 @@ _SIDE_EXTREMES = {"left": "leftmost", "right": "rightmost"}
 
 def wording_problems(text: str, form: lf.Instruction, grounder: Grounder) -> list[str]:
     """What in `text` (whose meaning is `form`) reads otherwise than it is scored on the
-    grounder's layout; empty when nothing does."""
-    tokens = tokenize(text)
+    grounder's layout; empty when nothing does. Text the lexicon cannot read (a hand-edited
+    task's) is itself the problem."""
+    try:
+        tokens = tokenize(text)
+    except InstructionError as error:
+        return [f"unreadable: {error}"]
     return (order_problems(tokens) + vacuous_comparisons(form, grounder)
             + clause_problems(tokens, form, grounder))
 
