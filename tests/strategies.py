@@ -99,7 +99,7 @@ def small_specs(draw) -> tuple[str, list[int]]:
                                     st.one_of(st.none(), st.tuples(st.integers(0, count - 1),
                                                                    st.sampled_from(sorted(_PLACEMENTS))))),
                           min_size=1, max_size=5))
-    name = lambda i: f"the {objects[i][1]} {objects[i][0]}"  # noqa: E731
+    name = lambda i: f"the {objects[i][1]} {objects[i][0]}"
     for index, (source, place) in enumerate(tasks):
         # the arm on the side of where the object goes, as an author would choose it
         x = _SLOTS[slots[place[0] if place else source]][0]
@@ -220,10 +220,10 @@ def rich_specs(draw) -> dict:
         layouts.append("look_alike")
     if layouts:
         lines += [f"    split L1 layouts=({', '.join(layouts)}) rounds=2 seed=7",
-                  f"    split L3 layouts=({', '.join(layouts)}) wordings=(referents) max=12 "
-                  "rounds=2 seed=7"]
-    lines += ["    split L2 wordings=(referents, routes, conditions, branches) max=12 rounds=2 "
-              "seed=7",
+                  (f"    split L3 layouts=({', '.join(layouts)}) wordings=(referents) max=12 "
+                   "rounds=2 seed=7")]
+    lines += [("    split L2 wordings=(referents, routes, conditions, branches) max=12 rounds=2 "
+               "seed=7"),
               "}"]
     return {"text": "\n".join(lines) + "\n", "twins": twins,
             "look_alike": "look_alike" if twins else None}
@@ -353,10 +353,10 @@ def scene_specs(draw, scene: str = "demo") -> dict:
             listed.append("L2")
     rule = ", ".join(layouts)
     lines += [f"    split L1 layouts=({rule}) max={maximum['L1']} rounds=2 seed=7",
-              f"    split L2 wordings=({', '.join(wordings)}) max={maximum['L2']} rounds=2 "
-              "seed=7",
-              f"    split L3 layouts=({rule}) wordings=(referents) max={maximum['L3']} "
-              "rounds=2 seed=7",
+              (f"    split L2 wordings=({', '.join(wordings)}) max={maximum['L2']} rounds=2 "
+               "seed=7"),
+              (f"    split L3 layouts=({rule}) wordings=(referents) max={maximum['L3']} "
+               "rounds=2 seed=7"),
               "}"]
     return {"id": scene, "text": "\n".join(lines) + "\n", "max": maximum, "listed": listed}
 

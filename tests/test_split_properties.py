@@ -118,8 +118,8 @@ def test_a_swap_of_identical_looking_bodies_is_never_a_changed_layout(generated)
 
 def _route_world(source, target, body) -> World:
     """A label at `target`, a slab at `source` and one at `body` (x, y)."""
-    slab = dict(kind="slab", fixture=False, color="red", rgb=(1, 0, 0),
-                half_extents=(0.018, 0.028, 0.013))
+    slab = {"kind": "slab", "fixture": False, "color": "red", "rgb": (1, 0, 0),
+            "half_extents": (0.018, 0.028, 0.013)}
     bodies = {"s": Body(id="s", **slab), "w": Body(id="w", **{**slab, "color": "blue"}),
               "label": Body(id="label", kind="label", fixture=True, color="green",
                             rgb=(0, 1, 0), half_extents=(0.035, 0.035, 0.001))}
