@@ -238,7 +238,8 @@ route_geometry = st.tuples(
 
 
 # several small scenes compiled together: distinct referents, a group of two or three
-# look-alike bodies (same kind, size and colour) that no training task names, extra labels,
+# look-alike bodies (same kind, size and colour) that no training task names, or that look
+# like a referent the tasks then name by its side ('the leftmost red cube'), extra labels,
 # layouts that swap or move the bodies training tasks refer to, a layout where only the
 # look-alikes trade places, listed tests, and L1-L3 rules with a max
 _COLOURS = ["red", "green", "blue", "yellow"]
@@ -269,6 +270,15 @@ def scene_specs(draw, scene: str = "demo") -> dict:
     lines = [f'scene {scene} "Random {scene}" {{',
              "    jitter * x=[-0.01, 0.01] y=[-0.01, 0.01]"]
     lines += [_object_line(name, *look) for name, look in zip(referents, objects, strict=True)]
+    name = {f"o{i}": f"the {objects[i][1]} {objects[i][0]}" for i in range(count)}
+    x = {body: _GRID[slot][0] for body, slot in at.items()}
+    if copies and draw(st.booleans()):  # the look-alikes look like o0, named by its side
+        others = [x[body] for body in look_alikes]
+        side = ("leftmost" if x["o0"] < min(others) else
+                "rightmost" if x["o0"] > max(others) else None)
+        if side:
+            decoy = objects[0]
+            name["o0"] = f"the {side} {objects[0][1]} {objects[0][0]}"
     lines += [_object_line(name, *decoy) for name in look_alikes]
     lines += [f"    fixture {name} label {_LABEL_HALF} color={colour} rgb={_RGB[colour]}"
               for name, colour in zip(fixtures, labels, strict=True)]
@@ -276,8 +286,6 @@ def scene_specs(draw, scene: str = "demo") -> dict:
     lines += [f"        {body} at ({_GRID[slot][0]}, {_GRID[slot][1]})"
               for body, slot in at.items()]
     lines.append("    }")
-    name = {f"o{i}": f"the {objects[i][1]} {objects[i][0]}" for i in range(count)}
-    x = {body: _GRID[slot][0] for body, slot in at.items()}
     # training tasks: each names one or two referents (never a look-alike)
     texts = []
     for kind in draw(st.lists(st.sampled_from(["pick", "place", "push", "label",
@@ -306,6 +314,12 @@ def scene_specs(draw, scene: str = "demo") -> dict:
         lines += [f"    task {scene}_t{index} on base {{", f'        "{text}."', "    }"]
     # layouts that move referents: swaps with any other body, moves to a free slot
     named = sorted({body for body in referents if any(name[body] in t for t in texts)})
+    looks_of = {**dict(zip(referents, objects, strict=True)),
+                **{body: decoy for body in look_alikes}, **{f: f for f in fixtures}}
+
+    def view(places: dict) -> set:
+        return {(slot, looks_of[body]) for body, slot in places.items()}
+
     layouts, moved = [], {}
     for index in range(draw(st.integers(1, 2))):
         where = dict(at)
@@ -323,7 +337,8 @@ def scene_specs(draw, scene: str = "demo") -> dict:
                 ops.append(f"swap {body} {other}")
         lines.append(f"    layout v{index} from base {{ {' '.join(ops)} }}")
         layouts.append(f"v{index}")
-        moved[f"v{index}"] = {body for body in bodies if where[body] != at[body]}
+        if view(where) != view(at):  # (not when only look-alikes traded places)
+            moved[f"v{index}"] = {body for body in bodies if where[body] != at[body]}
     if copies:  # only the look-alikes trade places: it looks the same as base
         lines.append("    layout same from base { swap d0 d1 }")
         layouts.append("same")
@@ -331,17 +346,19 @@ def scene_specs(draw, scene: str = "demo") -> dict:
         t.startswith("If") for t in texts) else [])
     maximum = {level: draw(st.integers(1, 6)) for level in ("L1", "L2", "L3")}
     listed = []
-    # a training instruction listed on a changed layout where what it names stays put
+    # a training instruction listed on a changed layout where what it names stays put (a pick,
+    # or a place on a label: where a place beside a body or a push goes depends on the rest)
     mentions = {text: {b for b in referents if name[b] in text}
                 | {f for f in fixtures if f"the {f.removesuffix('_label')} label" in text}
                 for text in texts}
     unmoved = [(layout, text) for layout, changed in moved.items() for text in texts
-               if changed and not changed & mentions[text]]
+               if not changed & mentions[text] and not text.startswith("If")
+               and " towards " not in text and (" place it " not in text or "label" in text)]
     if unmoved and draw(st.booleans()):
         layout, text = draw(st.sampled_from(unmoved))
         lines += [f"    test L1 listed_{scene}_l1 on {layout} {{", f'        "{text}."', "    }"]
         listed.append("L1")
-    kinds = [kind for kind, _ in objects + [decoy] * copies]
+    kinds = [kind for kind, _ in objects + [decoy] * copies]  # (decoy: the look-alikes')
     picked = [(text, body) for text in texts for body in named
               if text.endswith(f"pick up {name[body]}") and not text.startswith("If")]
     if picked and draw(st.booleans()):  # the noun alone where it is the only one of its kind
@@ -364,8 +381,12 @@ def scene_specs(draw, scene: str = "demo") -> dict:
 @st.composite
 def several_scenes(draw) -> dict:
     """{"scenes": [scene_specs, ...], "one_file": bool}: two or three scenes with distinct
-    ids, written one to a file or all in one file."""
+    ids, written one to a file or all in one file; the second is sometimes the first under
+    another id (the same bodies, layouts and words)."""
     ids = draw(st.lists(st.sampled_from(["alpha", "beta", "gamma", "delta"]), min_size=2,
                         max_size=3, unique=True))
-    return {"scenes": [draw(scene_specs(scene)) for scene in ids],
-            "one_file": draw(st.booleans())}
+    scenes = [draw(scene_specs(scene)) for scene in ids]
+    if draw(st.integers(0, 3)) == 0:
+        first, second = scenes[0], ids[1]
+        scenes[1] = {**first, "id": second, "text": first["text"].replace(first["id"], second)}
+    return {"scenes": scenes, "one_file": draw(st.booleans())}
