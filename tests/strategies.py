@@ -350,7 +350,8 @@ def scene_specs(draw, scene: str = "demo") -> dict:
     # or a place on a label: where a place beside a body or a push goes depends on the rest)
     mentions = {text: {b for b in referents if name[b] in text}
                 | {f for f in fixtures if f"the {f.removesuffix('_label')} label" in text}
-                for text in texts}
+                | (set(look_alikes) if decoy == objects[0] and name["o0"] in text else set())
+                for text in texts}  # (o0 named by its side among its look-alikes)
     unmoved = [(layout, text) for layout, changed in moved.items() for text in texts
                if not changed & mentions[text] and not text.startswith("If")
                and " towards " not in text and (" place it " not in text or "label" in text)]
