@@ -99,7 +99,7 @@ def small_specs(draw) -> tuple[str, list[int]]:
                                     st.one_of(st.none(), st.tuples(st.integers(0, count - 1),
                                                                    st.sampled_from(sorted(_PLACEMENTS))))),
                           min_size=1, max_size=5))
-    name = lambda i: f"the {objects[i][1]} {objects[i][0]}"  # noqa: E731
+    name = lambda i: f"the {objects[i][1]} {objects[i][0]}"
     for index, (source, place) in enumerate(tasks):
         # the arm on the side of where the object goes, as an author would choose it
         x = _SLOTS[slots[place[0] if place else source]][0]
@@ -220,10 +220,10 @@ def rich_specs(draw) -> dict:
         layouts.append("look_alike")
     if layouts:
         lines += [f"    split L1 layouts=({', '.join(layouts)}) rounds=2 seed=7",
-                  f"    split L3 layouts=({', '.join(layouts)}) wordings=(referents) max=12 "
-                  "rounds=2 seed=7"]
-    lines += ["    split L2 wordings=(referents, routes, conditions, branches) max=12 rounds=2 "
-              "seed=7",
+                  (f"    split L3 layouts=({', '.join(layouts)}) wordings=(referents) max=12 "
+                   "rounds=2 seed=7")]
+    lines += [("    split L2 wordings=(referents, routes, conditions, branches) max=12 rounds=2 "
+               "seed=7"),
               "}"]
     return {"text": "\n".join(lines) + "\n", "twins": twins,
             "look_alike": "look_alike" if twins else None}
@@ -235,3 +235,159 @@ route_geometry = st.tuples(
     st.floats(-0.2, 0.2), st.floats(-0.25, 0.0),  # source x, y
     st.floats(0.20, 0.35), st.floats(0, 2 * 3.141592653589793),  # path length, heading
 )
+
+
+# several small scenes compiled together: distinct referents, a group of two or three
+# look-alike bodies (same kind, size and colour) that no training task names, or that look
+# like a referent the tasks then name by its side ('the leftmost red cube'), extra labels,
+# layouts that swap or move the bodies training tasks refer to, a layout where only the
+# look-alikes trade places, listed tests, and L1-L3 rules with a max
+_COLOURS = ["red", "green", "blue", "yellow"]
+_LABEL_HALF = "half=(0.03, 0.03, 0.001)"
+
+
+def _object_line(name: str, kind: str, colour: str) -> str:
+    return (f"    object {name} {kind} {_SIZES[kind]} color={colour} rgb={_RGB[colour]} "
+            "mass=0.2 friction=0.5")
+
+
+@st.composite
+def scene_specs(draw, scene: str = "demo") -> dict:
+    """{"id", "text", "max": {level: N}, "listed": [level, ...]} for one small random scene
+    named `scene` (its task labels start with the scene's id, as labels are global)."""
+    count = draw(st.integers(2, 3))
+    looks = draw(st.lists(st.tuples(st.sampled_from(sorted(_SIZES)), st.sampled_from(_COLOURS)),
+                          min_size=count + 1, max_size=count + 1, unique=True))
+    objects, decoy = looks[:count], looks[count]
+    copies = draw(st.sampled_from([0, 0, 2, 3]))
+    labels = draw(st.lists(st.sampled_from(_COLOURS), max_size=2, unique=True))
+    slots = list(draw(st.permutations(range(len(_GRID)))))
+    referents = [f"o{i}" for i in range(count)]
+    look_alikes = [f"d{i}" for i in range(copies)]
+    fixtures = [f"{colour}_label" for colour in labels]
+    bodies = referents + look_alikes + fixtures
+    at = {body: slots[index] for index, body in enumerate(bodies)}
+    lines = [f'scene {scene} "Random {scene}" {{',
+             "    jitter * x=[-0.01, 0.01] y=[-0.01, 0.01]"]
+    lines += [_object_line(name, *look) for name, look in zip(referents, objects, strict=True)]
+    name = {f"o{i}": f"the {objects[i][1]} {objects[i][0]}" for i in range(count)}
+    x = {body: _GRID[slot][0] for body, slot in at.items()}
+    if copies and draw(st.booleans()):  # the look-alikes look like o0, named by its side
+        others = [x[body] for body in look_alikes]
+        side = ("leftmost" if x["o0"] < min(others) else
+                "rightmost" if x["o0"] > max(others) else None)
+        if side:
+            decoy = objects[0]
+            name["o0"] = f"the {side} {objects[0][1]} {objects[0][0]}"
+    lines += [_object_line(name, *decoy) for name in look_alikes]
+    lines += [f"    fixture {name} label {_LABEL_HALF} color={colour} rgb={_RGB[colour]}"
+              for name, colour in zip(fixtures, labels, strict=True)]
+    lines.append("    layout base {")
+    lines += [f"        {body} at ({_GRID[slot][0]}, {_GRID[slot][1]})"
+              for body, slot in at.items()]
+    lines.append("    }")
+    # training tasks: each names one or two referents (never a look-alike)
+    texts = []
+    for kind in draw(st.lists(st.sampled_from(["pick", "place", "push", "label",
+                                               "conditional"]), min_size=1, max_size=3)):
+        source, other = draw(st.permutations(referents))[:2]
+        if kind == "place":
+            where = draw(st.sampled_from(sorted(_PLACEMENTS)))
+            texts.append(f"Use your {_arm(x[other])} arm to pick up {name[source]} and place "
+                         f"it {_PLACEMENTS[where]} {name[other]}")
+        elif kind == "push":
+            texts.append(f"Use your {_arm(x[source])} arm to push {name[source]} towards "
+                         f"{name[other]}")
+        elif kind == "label" and fixtures:
+            label = draw(st.sampled_from(fixtures))
+            texts.append(f"Use your {_arm(x[label])} arm to pick up {name[source]} and place "
+                         f"it on the {label.removesuffix('_label')} label")
+        elif kind == "conditional" and _GRID[at[source]][1] == _GRID[at[other]][1] \
+                and _arm(x[source]) != _arm(x[other]):
+            texts.append(f"If {name[source]} is to the left of {name[other]}, use your "
+                         f"{_arm(x[source])} arm to pick up {name[source]}; otherwise use your "
+                         f"{_arm(x[other])} arm to pick up {name[other]}")
+        else:
+            texts.append(f"Use your {_arm(x[source])} arm to pick up {name[source]}")
+    texts = list(dict.fromkeys(texts))
+    for index, text in enumerate(texts):
+        lines += [f"    task {scene}_t{index} on base {{", f'        "{text}."', "    }"]
+    # layouts that move referents: swaps with any other body, moves to a free slot
+    named = sorted({body for body in referents if any(name[body] in t for t in texts)})
+    looks_of = {**dict(zip(referents, objects, strict=True)),
+                **{body: decoy for body in look_alikes}, **{f: f for f in fixtures}}
+
+    def view(places: dict) -> set:
+        return {(slot, looks_of[body]) for body, slot in places.items()}
+
+    layouts, moved = [], {}
+    for index in range(draw(st.integers(1, 2))):
+        where = dict(at)
+        ops = []
+        for _ in range(draw(st.integers(1, 2))):
+            body = draw(st.sampled_from(named))
+            free = [s for s in range(len(_GRID)) if s not in where.values()]
+            if free and draw(st.booleans()):
+                slot = draw(st.sampled_from(free))
+                where[body] = slot
+                ops.append(f"move {body} to ({_GRID[slot][0]}, {_GRID[slot][1]})")
+            else:
+                other = draw(st.sampled_from([b for b in bodies if b != body]))
+                where[body], where[other] = where[other], where[body]
+                ops.append(f"swap {body} {other}")
+        lines.append(f"    layout v{index} from base {{ {' '.join(ops)} }}")
+        layouts.append(f"v{index}")
+        if view(where) != view(at):  # (not when only look-alikes traded places)
+            moved[f"v{index}"] = {body for body in bodies if where[body] != at[body]}
+    if copies:  # only the look-alikes trade places: it looks the same as base
+        lines.append("    layout same from base { swap d0 d1 }")
+        layouts.append("same")
+    wordings = ["referents"] + (["conditions", "branches"] if any(
+        t.startswith("If") for t in texts) else [])
+    maximum = {level: draw(st.integers(1, 6)) for level in ("L1", "L2", "L3")}
+    listed = []
+    # a training instruction listed on a changed layout where what it names stays put (a pick,
+    # or a place on a label: where a place beside a body or a push goes depends on the rest)
+    mentions = {text: {b for b in referents if name[b] in text}
+                | {f for f in fixtures if f"the {f.removesuffix('_label')} label" in text}
+                | (set(look_alikes) if decoy == objects[0] and name["o0"] in text else set())
+                for text in texts}  # (o0 named by its side among its look-alikes)
+    unmoved = [(layout, text) for layout, changed in moved.items() for text in texts
+               if not changed & mentions[text] and not text.startswith("If")
+               and " towards " not in text and (" place it " not in text or "label" in text)]
+    if unmoved and draw(st.booleans()):
+        layout, text = draw(st.sampled_from(unmoved))
+        lines += [f"    test L1 listed_{scene}_l1 on {layout} {{", f'        "{text}."', "    }"]
+        listed.append("L1")
+    kinds = [kind for kind, _ in objects + [decoy] * copies]  # (decoy: the look-alikes')
+    picked = [(text, body) for text in texts for body in named
+              if text.endswith(f"pick up {name[body]}") and not text.startswith("If")]
+    if picked and draw(st.booleans()):  # the noun alone where it is the only one of its kind
+        text, body = draw(st.sampled_from(picked))
+        kind = objects[int(body[1:])][0]
+        if kinds.count(kind) == 1:
+            lines += [f"    test L2 listed_{scene}_l2 on base {{",
+                      f'        "{text.replace(name[body], f"the {kind}")}."', "    }"]
+            listed.append("L2")
+    rule = ", ".join(layouts)
+    lines += [f"    split L1 layouts=({rule}) max={maximum['L1']} rounds=2 seed=7",
+              (f"    split L2 wordings=({', '.join(wordings)}) max={maximum['L2']} rounds=2 "
+               "seed=7"),
+              (f"    split L3 layouts=({rule}) wordings=(referents) max={maximum['L3']} "
+               "rounds=2 seed=7"),
+              "}"]
+    return {"id": scene, "text": "\n".join(lines) + "\n", "max": maximum, "listed": listed}
+
+
+@st.composite
+def several_scenes(draw) -> dict:
+    """{"scenes": [scene_specs, ...], "one_file": bool}: two or three scenes with distinct
+    ids, written one to a file or all in one file; the second is sometimes the first under
+    another id (the same bodies, layouts and words)."""
+    ids = draw(st.lists(st.sampled_from(["alpha", "beta", "gamma", "delta"]), min_size=2,
+                        max_size=3, unique=True))
+    scenes = [draw(scene_specs(scene)) for scene in ids]
+    if draw(st.integers(0, 3)) == 0:
+        first, second = scenes[0], ids[1]
+        scenes[1] = {**first, "id": second, "text": first["text"].replace(first["id"], second)}
+    return {"scenes": scenes, "one_file": draw(st.booleans())}

@@ -39,7 +39,8 @@ _SIDE_EXTREMES = {"left": "leftmost", "right": "rightmost"}
 
 def wording_problems(text: str, form: lf.Instruction, grounder: Grounder) -> list[str]:
     """What in `text` (whose meaning is `form`) reads otherwise than it is scored on the
-    grounder's layout; empty when nothing does."""
+    grounder's layout; empty when nothing does. Text the lexicon cannot read (a hand-edited
+    task's) is itself the problem."""
     try:
         tokens = tokenize(text)
     except InstructionError as error:
