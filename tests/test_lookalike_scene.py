@@ -8,8 +8,8 @@ from __future__ import annotations
 import shutil
 
 from robofollow.audit.splits import FINDING_KEYS, findings
-from robofollow.benchmark.pipeline import clean, compile_specs
-from robofollow.cli import main, parser
+from robofollow.benchmark.pipeline import compile_specs
+from robofollow.cli import main
 from robofollow.resources import builtin_specs
 
 SHIPPED = ("scene1", "scene2", "scene3", "scene4")
@@ -97,14 +97,6 @@ scene scene5 "Look-alike objects and labels" {
 """
 
 
-def _cli_knows_no_verify() -> bool:
-    try:
-        parser().parse_args(["compile", "specs", "--out", "out", "--no-verify"])
-    except SystemExit:
-        return False
-    return True
-
-
 def _tasks(compiled, scene: str) -> list[dict]:
     return [t.model_dump(mode="json") for t in compiled.splits.tasks if t.scene == scene]
 
@@ -115,13 +107,7 @@ def test_a_look_alike_scene_compiles_clean_beside_the_shipped_specs(tmp_path):
     for path in sorted(builtin_specs().glob("*.rf")):
         shutil.copy(path, folder / path.name)
     (folder / "scene5.rf").write_text(SCENE5)
-    if _cli_knows_no_verify():
-        assert main(["compile", str(folder), "--out", str(tmp_path / "out"),
-                     "--no-verify"]) == 0
-    else:
-        # `compile --no-verify` is on its way (a compile may verify new scenes in
-        # simulation); until the CLI takes it, what it checks without the simulation
-        assert clean(compile_specs(folder))
+    assert main(["compile", str(folder), "--out", str(tmp_path / "out"), "--no-verify"]) == 0
     compiled = compile_specs(folder)  # (the CLI's compile, cached for this folder's state)
     report = compiled.report
     assert findings(report) == 0, {key: report[key] for key in FINDING_KEYS if report[key]}
