@@ -104,3 +104,12 @@ def test_compile_reports_a_changed_split_by_name_and_counts(tmp_path, capsys, ve
     assert main(["compile", str(folder), "--out", str(tmp_path / "out3")]) == 0
     assert "every split is the one" in capsys.readouterr().out
     assert verified == [("scene2",), ("scene2",)]
+
+
+def test_one_shipped_spec_file_is_checked_against_its_folders_lock(tmp_path, capsys, verified):
+    assert main(["compile", str(builtin_specs() / "scene2.rf"), "--out",
+                 str(tmp_path / "out")]) == 0
+    assert "every split is the one" in capsys.readouterr().out and verified == []
+    assert main(["compile", str(builtin_specs() / "scene2.rf"), "--out",
+                 str(tmp_path / "out2"), "--update-lock"]) == 1
+    assert "--update-lock needs a specs folder" in capsys.readouterr().err

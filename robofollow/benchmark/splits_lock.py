@@ -24,9 +24,12 @@ def lock_entries(compiled: Compiled) -> dict[str, dict]:
             for scene, digest in compiled.split_digests.items()}
 
 
-def lock_path(specs: Path) -> Path | None:
-    """Where a specs folder keeps its lock (None for a list of files)."""
-    return specs / LOCK_FILE if isinstance(specs, Path) and specs.is_dir() else None
+def lock_path(specs: Path | list[Path]) -> Path | None:
+    """The lock beside the specs: in a specs folder, or in a spec file's folder (None for a
+    list of files)."""
+    if not isinstance(specs, Path):
+        return None
+    return (specs if specs.is_dir() else specs.parent) / LOCK_FILE
 
 
 def read_lock(path: Path | None) -> dict[str, dict]:

@@ -47,7 +47,7 @@ def cmd_compile(args) -> int:
     check_out(Path(args.out))  # before the work: an --out that cannot take the build is refused
     specs = specs_of(args)
     lock = lock_path(specs)
-    if args.update_lock and lock is None:
+    if args.update_lock and not (isinstance(specs, Path) and specs.is_dir()):
         raise RoboFollowError("--update-lock needs a specs folder (the lock sits beside the "
                               "specs)")
     locked = read_lock(lock)
