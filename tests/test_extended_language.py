@@ -229,6 +229,24 @@ def test_vertical_relation_needs_the_footprints_over_each_other(scenes):
     assert not moved.related("green_cylinder", "above", "blue_cube")  # 3 cm off: not above
 
 
+def test_a_support_is_not_beside_what_rests_on_it(scenes):
+    """Settled a few millimetres off its support's centre, a stacked body is still on it, not
+    to its left: 'the cylinder to the right of the cube' names the other cylinder (the expert
+    grounds on the settled layout, where this once fell into a tie)."""
+    world = World(scenes["scene4"], "scene4_3")
+    settled = {b: (p.x, p.y, p.z) for b, p in world.poses.items()}
+    x, y, z = settled["blue_cube"]  # on the yellow cylinder
+    settled["blue_cube"] = (x - 0.004, y, z)
+    moved = World(scenes["scene4"], "scene4_3", positions=settled)
+    assert moved.related("blue_cube", "on", "yellow_cylinder")
+    assert not moved.related("yellow_cylinder", "right_of", "blue_cube")
+    assert not moved.related("blue_cube", "left_of", "yellow_cylinder")
+    behaviour = Grounder(moved).behaviour(parse(
+        "Using your right arm, take the cube that is on the yellow cylinder then put it on top "
+        "of the cylinder that is to the right of the cube."))
+    assert behaviour.steps[0].target == "green_cylinder"
+
+
 def test_nearest_and_farthest_by_distance(scenes):
     # scene2 default: cubes at x -0.14 (large blue) and -0.03 (small red); bowls at 0.07, 0.16
     assert source(scenes, "scene2", "default", "Pick up the cube closest to the yellow bowl.") \

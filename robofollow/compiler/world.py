@@ -114,10 +114,17 @@ class World:
             return (bowl.kind == "bowl"
                     and math.hypot(pa.x - pb.x, pa.y - pb.y) <= bowl.half_extents[0]
                     and self.bottom(a) < self.top(b))
+        if self._stacked(a, b):  # beside, not on or under: a support is no neighbour
+            return False
         distance = math.hypot(pa.x - pb.x, pa.y - pb.y)
         if relation == "next_to":
             return 0 < distance <= RELATION_RANGE
         return in_cone(pa.x - pb.x, pa.y - pb.y, DIRECTIONS[relation]) and distance <= RELATION_RANGE
+
+    def _stacked(self, a: str, b: str) -> bool:
+        """Whether one body rests on or in the other (as measured, settled bodies included)."""
+        return any(self.related(upper, relation, lower) for upper, lower in ((a, b), (b, a))
+                   for relation in ("on", "in"))
 
     def between(self, body: str, a: str, b: str) -> bool:
         """Whether `body` stands between `a` and `b`: its centre projects strictly inside the
