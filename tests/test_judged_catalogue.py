@@ -60,8 +60,8 @@ S1_PICK = "scene1/L0/pickup_yellow_block_1_left#r1"  # left arm, yellow_block_1
 S1_BEHIND = "scene1/L0/place_yellow_block_1_behind_red_cylinder#r1"  # right arm
 S1_LEFT_OF = "scene1/L0/place_yellow_block_2_left_of_red_sphere#r1"  # left arm
 S1_L1 = "scene1/L1/place_yellow_block_1_beside_red_cylinder@scene1_2#r1"  # yellow_block_3 now
-S1_L2 = "scene1/L2/place_yellow_block_2_left_of_red_sphere@default/referents-f4c39c60#r1"
-S1_L3 = "scene1/L3/place_yellow_block_1_behind_red_cylinder@scene1_2/referents-9bd0f83d#r1"
+S1_L2 = "scene1/L2/place_yellow_block_2_left_of_red_sphere@default/referents-e7a8892d#r1"
+S1_L3 = "scene1/L3/place_yellow_block_1_behind_red_cylinder@scene1_2/referents-1b23fabc#r1"
 S2_PICK = "scene2/L0/pickup_right_cube#r1"  # left arm, small_red_cube
 S2_PICK_BIG = "scene2/L0/pickup_red_cylinder#r1"
 S2_STACK = "scene2/L0/stack_left_cube_on_red_cylinder#r1"
@@ -70,7 +70,7 @@ S2_PUSH = "scene2/L0/push_left_cube_to_red_cylinder#r1"
 S2_PUSH_ROW = "scene2/L0/push_left_cube_to_blue_cylinder#r1"
 S2_L1_BOWL = "scene2/L1/place_right_cube_in_green_bowl@scene2_5#r1"  # the bowls swapped
 S2_L2_STACK = "scene2/L2/stack_left_cube_on_blue_cylinder@default/referents-29baf3ea#r1"
-S2_L3_PUSH = "scene2/L3/push_left_cube_to_red_cylinder@scene2_1/referents-7823fa72#r1"
+S2_L3_PUSH = "scene2/L3/push_left_cube_to_red_cylinder@scene2_1/referents-d367c008#r1"
 S3_VIA = "scene3/L0/r_pick2_via4_to6_short_front#r1"  # red -> blue label over yellow
 S3_AVOID = "scene3/L0/l_pick5_around2_to1_short_right#r1"  # blue -> green label, not over red
 S3_L1 = "scene3/L1/r_pick2_via4_to6_short_front@scene3_2#r1"  # yellow and blue swapped
@@ -83,8 +83,8 @@ S4_STACK = "scene4/L0/s41_r_stack_green_cylinder_on_yellow#r1"
 S4_PICK = "scene4/L0/s41_l_pick_blue_sphere#r1"
 S4_BOWL_CUBE = "scene4/L0/s41_l_pick_cube_in_bowl#r1"
 S4_L1_IF = "scene4/L1/s41_if_bowl_nonempty_then_l_pick_blue_else_r_stack@scene4_5#r1"
-S4_L2_SEQ = "scene4/L2/s41_seq_r_green_cylinder_then_l_bowl@scene4_1/referents-6c27dab6#r1"
-S4_L3_PICK = "scene4/L3/s41_l_pick_blue_sphere@scene4_5/referents-338d5bef#r1"
+S4_L2_SEQ = "scene4/L2/s41_seq_r_green_cylinder_then_l_bowl@scene4_1/referents-2fc0eaa9#r1"
+S4_L3_PICK = "scene4/L3/s41_l_pick_blue_sphere@scene4_5/referents-eea05ed2#r1"
 
 
 def pick(arm: str, source: str) -> Behaviour:
