@@ -126,24 +126,19 @@ class _Generator:
             return False
         if task_id is None:
             task_id = f"{self.scene.id}/{level}/{origin}" + ("" if level == "L0" else f"@{layout}")
-        task = TestTask(id=task_id, scene=self.scene.id, level=level, layout=layout,
-                        instruction=instruction, form=form, behaviour=examined.behaviour,
-                        origin=origin, wording=wording)
+        motion = (motion_kind(self.rules, examined.behaviour, layout, origin)
+                  if level in MOVED_LEVELS else None)
         rule = self.scene.splits.get(level)
-        if level in MOVED_LEVELS and rule is not None and rule.motion == "moved":
-            task = task.model_copy(update={"motion": motion_kind(
-                self.rules, task.behaviour, layout, origin)})
-            if task.motion == "as-trained":
-                self.reject(level, layout, instruction, origin,
-                            f"as-trained: the expert moves as {origin} does")
-                return False
-        self.keep(task)
+        if motion == "as-trained" and rule is not None and rule.motion == "moved":
+            self.reject(level, layout, instruction, origin,
+                        f"as-trained: the expert moves as {origin} does")
+            return False
+        self.keep(TestTask(id=task_id, scene=self.scene.id, level=level, layout=layout,
+                           instruction=instruction, form=form, behaviour=examined.behaviour,
+                           origin=origin, wording=wording, motion=motion))
         return True
 
     def keep(self, task: TestTask) -> None:
-        if task.level in MOVED_LEVELS and task.origin in self.training and task.motion is None:
-            task = task.model_copy(update={"motion": motion_kind(
-                self.rules, task.behaviour, task.layout, task.origin)})
         self.rules.keep(task.id, task.level, task.layout, task.form)
         self.tasks.append(task)
 
