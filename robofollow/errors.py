@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import difflib
+from collections.abc import Iterable
+
 
 class RoboFollowError(Exception):
     """Root of every error RoboFollow raises on bad input."""
@@ -35,11 +38,16 @@ class InstructionError(RoboFollowError):
         lines = [f"error: {self.message} (column {self.column})",
                  f"  {self.text}",
                  "  " + " " * (self.column - 1) + "^" * self.length]
+        return "\n".join(lines + [f"  {hint}" for hint in self.hints()])
+
+    def hints(self) -> list[str]:
+        """What may stand at the column, and the known words a misspelt one may stand for."""
+        hints = []
         if self.expected:
-            lines.append("  expected: " + ", ".join(self.expected))
+            hints.append("expected: " + ", ".join(self.expected))
         if self.suggestions:
-            lines.append("  did you mean: " + ", ".join(repr(s) for s in self.suggestions) + "?")
-        return "\n".join(lines)
+            hints.append("did you mean: " + ", ".join(repr(s) for s in self.suggestions) + "?")
+        return hints
 
     def to_dict(self) -> dict:
         return {"type": self.code, "column": self.column, "message": self.message}
@@ -64,10 +72,11 @@ class UnsupportedConstructError(InstructionError):
 
 
 class SpecError(RoboFollowError):
-    """One problem in a spec file, at a 1-based line and column."""
+    """One problem in a spec file, at a 1-based line and column; `hints` are shown under the
+    caret."""
 
     def __init__(self, code: str, message: str, *, file: str, line: int, column: int,
-                 source_line: str = "", length: int = 1):
+                 source_line: str = "", length: int = 1, hints: tuple[str, ...] = ()):
         super().__init__(message)
         self.code = code
         self.message = message
@@ -76,15 +85,16 @@ class SpecError(RoboFollowError):
         self.column = column
         self.source_line = source_line
         self.length = max(length, 1)
+        self.hints = hints
 
     def __str__(self) -> str:
         return f"{self.file}:{self.line}:{self.column}: error[{self.code}]: {self.message}"
 
     def render(self) -> str:
-        if not self.source_line:
-            return str(self)
-        return (f"{self}\n  {self.source_line}\n"
-                f"  {' ' * (self.column - 1)}{'^' * self.length}")
+        lines = [str(self)]
+        if self.source_line:
+            lines += [f"  {self.source_line}", f"  {' ' * (self.column - 1)}{'^' * self.length}"]
+        return "\n".join(lines + [f"  {hint}" for hint in self.hints])
 
 
 class SpecErrors(RoboFollowError):
@@ -97,9 +107,20 @@ class SpecErrors(RoboFollowError):
         self.errors = errors
 
     def render(self) -> str:
-        count = len(self.errors)
         return "\n".join([e.render() for e in self.errors] +
-                         [f"{count} error{'s' if count != 1 else ''} in the specs"])
+                         [f"{counted(len(self.errors), 'error')} in the specs"])
+
+
+def counted(count: int, noun: str) -> str:
+    """'1 scene', '4 scenes': a count and its noun in the right number."""
+    return f"{count} {noun if count == 1 else noun + 's'}"
+
+
+def did_you_mean(name: str, known: Iterable[str]) -> str:
+    """"did you mean 'x'?" for the known name closest to a misspelt one ('' when none is
+    close)."""
+    close = difflib.get_close_matches(name, list(known), n=1)
+    return f"did you mean {close[0]!r}?" if close else ""
 
 
 def error_text(error: BaseException) -> str:

@@ -133,7 +133,8 @@ def structure() -> list[Case]:
     stacked = "\n".join(f"        c{i} on c{i - 1}" for i in range(1, 1500))
     tall = "\n".join(f"    object c{i} cube half=0.005 color=red rgb=(1, 0, 0) mass=0.2 "
                      "friction=0.1" for i in range(MAX_STACK + 1))
-    tall_stack = "\n".join(f"        c{i} on c{i - 1}" for i in range(1, MAX_STACK + 1))
+    tall_stack = "\n".join(f"        {MARK if i == MAX_STACK else ''}c{i} on c{i - 1}"
+                           for i in range(1, MAX_STACK + 1))
     task = ('    task pick_red on base {\n        "Pick up the red cube with your left arm."\n'
             "        expect pick left red_cube\n    }\n")
     listed = ('    test L0 {}t1 on base {{\n        "Pick up the red cube with your left arm."\n'
@@ -145,11 +146,11 @@ def structure() -> list[Case]:
                "    layout c from b { }", "layout-cycle", "derivation-cycle"),
         ("    jitter *", cubes + "\n    jitter *", "too-many-bodies", "1500-bodies"),
         ("    jitter *", cubes + "\n    jitter *", "too-many-bodies", "1500-body-stack"),
-        ("    layout base {\n        red_cube", f"{tall}\n    layout {MARK}base {{\n"
+        ("    layout base {\n        red_cube", f"{tall}\n    layout base {{\n"
          f"        c0 at (0.2, -0.2)\n{tall_stack}\n        red_cube", "stack-too-tall",
          "stack-taller-than-the-limit"),
         ("        bowl at (0.0, -0.15)", "        bowl at (0.0, -0.15)\n        red_cube on bowl\n"
-         "        bowl on blue_cube\n        blue_cube on red_cube", "support-cycle",
+         f"        bowl on blue_cube\n        {MARK}blue_cube on red_cube", "support-cycle",
          "support-cycle-of-three"),
         ("    object blue_cube", f"    object {MARK}red_cube sphere radius=0.02 color=red "
          "rgb=(1, 0, 0) mass=0.2 friction=0.1\n    object blue_cube", "duplicate-object",
@@ -182,8 +183,6 @@ def structure() -> list[Case]:
     ]
     result = [edit(old, new, code, case_id) for old, new, code, case_id in cases]
     result[-1].text = result[-1].text.replace("scene demo", f"scene {MARK}demo")
-    cycle = next(case for case in result if case.id == "support-cycle-of-three")
-    cycle.text = cycle.text.replace("layout base", f"layout {MARK}base")
     result[3].text = result[3].text.replace(
         "        bowl at (0.0, -0.15)", f"        bowl at (0.0, -0.15)\n        c0 at (0.2, -0.2)"
         f"\n{stacked}", 1)

@@ -65,9 +65,9 @@ def errors_of(tmp_path, text, name="bad.rf"):
 MALFORMED = [
     (edit("blue_cube at p1", "green_cube at p1"), "unknown-object", 9, 9),
     (edit("color=blue rgb=(0, 0, 1)", "color=blue rgb=(1, 0, 0)"), "colour-mismatch", 4, 12),
-    (edit("red_cube at (-0.1, 0.0)", "red_cube at (0.3, 0.3)"), "off-table", 7, 12),
-    (edit("red_cube at (-0.1, 0.0)", "red_cube at (0.08, 0.01)"), "overlap", 7, 12),
-    (edit("red_cube at (-0.1, 0.0)", "red_cube at (0.05, 0.0)"), "overlap", 7, 12),
+    (edit("red_cube at (-0.1, 0.0)", "red_cube at (0.3, 0.3)"), "off-table", 8, 9),
+    (edit("red_cube at (-0.1, 0.0)", "red_cube at (0.08, 0.01)"), "overlap", 9, 9),
+    (edit("red_cube at (-0.1, 0.0)", "red_cube at (0.05, 0.0)"), "overlap", 9, 9),
     (edit("blue_cube at p1", "blue_cube at p9"), "unknown-point", 9, 22),
     (edit("swap red_cube blue_cube", "swap red_cube red_cube"), "swap-self", 12, 46),
     (edit("swap red_cube blue_cube", "swap red_cube bowl_two"), "unknown-object", 12, 46),
@@ -76,9 +76,9 @@ MALFORMED = [
     (edit("layout swapped from base { swap red_cube blue_cube }",
           "layout swapped from other { swap red_cube blue_cube }\n"
           "    layout other from swapped { remove red_cube }"), "layout-cycle", 12, 12),
-    (edit("blue_cube at p1", "blue_cube at (-0.09, 0.0)"), "overlap", 7, 12),
+    (edit("blue_cube at p1", "blue_cube at (-0.09, 0.0)"), "overlap", 9, 9),
     (edit("blue_cube at p1", "blue_cube on red_cube\n        red_cube on blue_cube"),
-     "support-cycle", 7, 12),
+     "support-cycle", 10, 9),
     (edit("blue_cube at p1", "blue_cube in red_cube"), "not-a-container", 9, 22),
     (edit("swap red_cube blue_cube", "remove red_cube\n        move red_cube to p1"),
      "not-in-layout", 13, 14),
@@ -154,7 +154,7 @@ def test_a_split_rule_may_ask_for_moved_tasks_only(tmp_path):
 def test_a_misspelt_motion_is_located_with_a_suggestion(tmp_path):
     [error] = errors_of(tmp_path, edit("layouts=(swapped) rounds",
                                        "layouts=(swapped) motion=moevd rounds"))
-    assert "unknown motion moevd; did you mean moved?" in error.message
+    assert "unknown motion moevd; did you mean 'moved'?" in error.message
     assert error.render().splitlines()[0].endswith("(known: any | moved: every task, or only "
                                                    "those whose expert motion differs from the "
                                                    "training task's)")

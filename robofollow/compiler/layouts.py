@@ -1,23 +1,34 @@
 """Layouts -> poses: a layout is written as placements, or as operations on another layout
 (`layout b from a { swap x y }`); every body is posed on the table, on another body or in a
 bowl. Checked here: cycles of derivation and of support, stacks at most MAX_STACK high, and
-footprints that stay on the table and clear of each other with the jitter at its extremes.
-Iterative throughout: neither a long chain of derived layouts nor a stack recurses."""
+(footprints.py) footprints that stay on the table and clear of each other with the jitter at
+its extremes. A problem of poses is reported at the statement that causes it, once: the
+layouts derived from the first that has it, and keep it, are named there. Iterative throughout: neither a long chain of derived layouts nor a stack recurses."""
 
 from __future__ import annotations
 
-import math
+from dataclasses import dataclass, field
 
 from lark import Token
 
-from robofollow.compiler.spec import MAX_STACK, Body, Jitter, Layout, Placed
+from robofollow.compiler.footprints import Footprints, Spot
+from robofollow.compiler.spec import MAX_STACK, Body, Layout, Placed
 from robofollow.compiler.spec_checks import Checks
 from robofollow.compiler.spec_syntax import Coordinates, LayoutNode, LayoutOp
-from robofollow.compiler.workspace import table_bounds
 
 BOWL_FLOOR = 0.005  # m: height of a bowl's inner floor above its bottom
 BOWL_WALL = 0.004  # m: a bowl's wall thickness (its radius is the wall's outside)
 BOWL_SEGMENTS = 16  # flat wall boxes around a bowl (face normals every 360/16 deg from +x)
+
+
+@dataclass
+class _Problem:
+    """A problem of poses: reported once, at the first layout that has it, naming the others."""
+
+    code: str
+    message: str
+    where: Token
+    layouts: list[str] = field(default_factory=list)
 
 
 class LayoutResolver:
@@ -26,17 +37,16 @@ class LayoutResolver:
 
     def __init__(self, checks: Checks, bodies: dict[str, Body],
                  points: dict[str, tuple[float, float]], bad_points: set[str], table: float,
-                 jitter: dict[str, Jitter], broken: set[str]):
+                 footprints: Footprints):
         self.checks = checks
-        self.broken = broken
-        self.jitter = jitter
         self.bodies = bodies
         self.points = points
         self.bad_points = bad_points
         self.table = table
+        self.footprints = footprints
         self.raw: dict[str, LayoutNode] = {}
-        self.done: dict[str, dict[str, tuple] | None] = {}
-        self.reported: set[tuple] = set()  # geometry problems already reported (once each)
+        self.done: dict[str, dict[str, Spot] | None] = {}
+        self.problems: dict[tuple, _Problem] = {}  # of poses, by key, in the order found
         self.unposed: set[str] = set()  # layouts whose bodies could not be posed
 
     def resolve(self, nodes: list[LayoutNode]) -> dict[str, Layout]:
@@ -58,12 +68,12 @@ class LayoutResolver:
             for layout in reversed(chain):
                 base = self.base(layout)
                 # derived from a layout that could not be posed: fails quietly if it also fails
-                placed = self.poses(self.done[layout], self.raw[layout].name,
-                                    quiet=base in self.unposed)
+                placed = self.poses(self.done[layout], layout, quiet=base in self.unposed)
                 if placed is None:
                     self.unposed.add(layout)
                 else:
                     posed[layout] = Layout(name=layout, base=base, placed=placed)
+        self.report_problems()
         return {name: posed[name] for name in self.raw if name in posed}
 
     def base(self, name: str) -> str | None:
@@ -72,7 +82,7 @@ class LayoutResolver:
 
     def known(self, token: Token) -> bool:
         if token not in self.bodies:
-            self.checks.error("unknown-object", f"no object named {token!s}", token)
+            self.checks.unknown_name("unknown-object", "object", token, self.bodies)
             return False
         return True
 
@@ -81,13 +91,14 @@ class LayoutResolver:
             if node in self.bad_points:  # already reported where the point is defined
                 return None
             if node not in self.points:
-                self.checks.error("unknown-point", f"no point named {node!s}", node)
+                self.checks.unknown_name("unknown-point", "point", node,
+                                         [*self.points, *sorted(self.bad_points)])
                 return None
             return self.points[str(node)]
         return self.checks.coordinates(node, body)
 
-    def arrangement(self, name: str) -> dict[str, tuple] | None:
-        """body -> ("at", (x, y)) | ("on", body) | ("in", body), or None if it failed. The chain
+    def arrangement(self, name: str) -> dict[str, Spot] | None:
+        """body -> its spot, or None if the layout failed. The chain
         of bases is followed down to a resolved layout (or a cycle, or an undefined base), then
         resolved back up in a loop."""
         chain: list[str] = []
@@ -103,12 +114,12 @@ class LayoutResolver:
             if base is None:
                 break  # written as placements
             if base not in self.raw:
-                self.checks.error("undefined-layout", f"no layout named {base!s}", base)
+                self.checks.unknown_name("undefined-layout", "layout", base, self.raw)
                 return self.fail(chain)
             current = str(base)
         for layout in reversed(chain):
             base = self.base(layout)
-            arrangement: dict[str, tuple] = {}
+            arrangement: dict[str, Spot] = {}
             if base is not None:
                 inherited = self.done[base]
                 if inherited is None:
@@ -122,9 +133,8 @@ class LayoutResolver:
     def fail(self, chain: list[str]) -> None:
         for layout in chain:
             self.done.setdefault(layout, None)
-        return None
 
-    def apply(self, op: LayoutOp, arrangement: dict[str, tuple]) -> bool:
+    def apply(self, op: LayoutOp, arrangement: dict[str, Spot]) -> bool:
         """Apply one operation; False (reported, or already reported) when it fails."""
         kind, other = op.kind, op.other
         if not (self.known(op.body) and (other is None or self.known(other))):
@@ -137,14 +147,14 @@ class LayoutResolver:
             position = self.position(op.position, first)
             if position is None:
                 return False
-            arrangement[first] = ("at", position)
+            arrangement[first] = Spot("at", position, op.body, op.body)
         elif kind in ("on", "put_on"):
-            arrangement[first] = ("on", str(other))
+            arrangement[first] = Spot("on", str(other), op.body, op.body)
         elif kind in ("in_", "put_in"):
             if self.bodies[str(other)].kind != "bowl":
                 self.checks.error("not-a-container", f"{other!s} is not a bowl", other)
                 return False
-            arrangement[first] = ("in", str(other))
+            arrangement[first] = Spot("in", str(other), op.body, op.body)
         elif kind == "swap":
             second = str(other)
             if first == second:
@@ -153,9 +163,12 @@ class LayoutResolver:
             if second not in arrangement:
                 self.checks.error("not-in-layout", f"{second} is not in this layout", other)
                 return False
-            arrangement[first], arrangement[second] = arrangement[second], arrangement[first]
+            mine, theirs = arrangement[first], arrangement[second]
+            arrangement[first] = Spot(theirs.how, theirs.value, theirs.written, op.body)
+            arrangement[second] = Spot(mine.how, mine.value, mine.written, other)
         elif kind == "remove":
-            resting = [b for b, (how, where) in arrangement.items() if how != "at" and where == first]
+            resting = [b for b, spot in arrangement.items()
+                       if spot.how != "at" and spot.value == first]
             if resting:
                 self.checks.error("support-removed", f"{', '.join(resting)} rests on {first}",
                                   op.body)
@@ -163,34 +176,44 @@ class LayoutResolver:
             del arrangement[first]
         return True
 
-    def poses(self, arrangement: dict[str, tuple], where: Token,
+    def poses(self, arrangement: dict[str, Spot], layout: str,
               quiet: bool = False) -> dict[str, Placed] | None:
         """Every body's pose: a stack is walked down to the body on the table, then placed
-        upwards (a loop; at most MAX_STACK bodies high)."""
+        upwards (a loop; at most MAX_STACK bodies high). Quiet: only problems already found in
+        another layout are recorded."""
         placed: dict[str, Placed] = {}
-        report = (lambda *_: None) if quiet else self.report
         height: dict[str, int] = {}  # bodies from this one down to the table, itself included
+
+        def record(key: tuple, code: str, message: str, where: Token) -> None:
+            self.record(key, code, message, where, layout, new=not quiet)
+
         for start in arrangement:
             stack = [start]
             while stack[-1] not in placed:
                 body = stack[-1]
-                how, value = arrangement[body]
-                if how == "at":
+                spot = arrangement[body]
+                if spot.how == "at":
                     break
-                if value in stack:
-                    report(("support-cycle", body, value), "support-cycle",
+                value = spot.value
+                if value in stack:  # reported at the statement that closes the cycle
+                    cycle = stack[stack.index(value):]
+                    last = max((arrangement[b].by for b in cycle),
+                               key=lambda token: (token.line, token.column))
+                    record(("support-cycle", *sorted(cycle)), "support-cycle",
                            f"{body} rests on itself" if value == body else
-                           f"{body} and {value} rest on each other", where)
+                           f"{', '.join(cycle[:-1])} and {cycle[-1]} rest on each other "
+                           f"({' on '.join([*cycle, value])})", last)
                     return None
                 if value not in arrangement:
-                    report(("not-in-layout", body, value), "not-in-layout",
-                           f"{body} rests on {value}, which is not in this layout", where)
+                    record(("not-in-layout", body, value), "not-in-layout",
+                           f"{body} rests on {value}, which is not in this layout", spot.by)
                     return None
                 stack.append(value)
             for body in reversed(stack):
                 if body in placed:
                     continue
-                how, value = arrangement[body]
+                spot = arrangement[body]
+                how, value = spot.how, spot.value
                 half = self.bodies[body].half_extents[2]
                 if how == "at":
                     placed[body], height[body] = Placed(x=value[0], y=value[1],
@@ -198,69 +221,49 @@ class LayoutResolver:
                     continue
                 height[body] = height[value] + 1
                 if height[body] > MAX_STACK:
-                    report(("stack-too-tall", body), "stack-too-tall", f"{body} rests on a "
-                           f"stack of {height[value]} bodies in layout {where!s}; at most "
-                           f"{MAX_STACK} bodies may rest on one another", where)
+                    record(("stack-too-tall", body), "stack-too-tall", f"{body} rests on a "
+                           f"stack of {height[value]} bodies in layout {layout}; at most "
+                           f"{MAX_STACK} bodies may rest on one another", spot.by)
                     return None
                 support = placed[value]
                 bottom = support.z - self.bodies[value].half_extents[2]
                 z = (support.z + self.bodies[value].half_extents[2] + half if how == "on"
                      else bottom + BOWL_FLOOR + half)
                 placed[body] = Placed(x=support.x, y=support.y, z=z, support=value, relation=how)
-        self.check_overlaps(placed, where)
+        self.footprints.check(placed, arrangement, layout, record)
         return placed  # supports before what rests on them
 
-    def report(self, key: tuple, code: str, message: str, where: Token) -> None:
-        """A problem of poses, reported at the first layout that has it (a derived layout
-        that keeps it does not repeat it, and fails, or is checked, without a second report)."""
-        if key not in self.reported:
-            self.reported.add(key)
-            self.checks.error(code, message, where)
+    def record(self, key: tuple, code: str, message: str, where: Token, layout: str,
+               new: bool = True) -> None:
+        """A problem of poses in a layout: the first layout that has it is where it is
+        reported; a layout that keeps it (one derived from that one) is named there."""
+        problem = self.problems.get(key)
+        if problem is None and new:
+            self.problems[key] = _Problem(code, message, where, [layout])
+        elif problem is not None and layout not in problem.layouts:
+            problem.layouts.append(layout)
 
-    def check_overlaps(self, placed: dict[str, Placed], where: Token) -> None:
-        """Bodies on the table stay on it and clear of each other with the jitter at its
-        extremes; nothing is stacked on a body that rolls. A broken body (a bad attribute,
-        reported there) is left out."""
-        broken = self.broken
-        on_table = sorted(b for b, p in placed.items() if p.relation == "table" and b not in broken)
-        ranges = {b: self.jitter.get(b) or self.jitter.get("*") or Jitter() for b in on_table}
-        low_x, high_x, low_y, high_y = table_bounds()
-        for body in on_table:
-            half, at, jitter = self.bodies[body].half_extents, placed[body], ranges[body]
-            if (at.x + jitter.x[0] - half[0] < low_x or at.x + jitter.x[1] + half[0] > high_x
-                    or at.y + jitter.y[0] - half[1] < low_y
-                    or at.y + jitter.y[1] + half[1] > high_y):
-                self.report(("off-table", body, at.x, at.y), "off-table",
-                            f"{body} at ({at.x:g}, {at.y:g}) can leave the table (x in "
-                            f"[{low_x:g}, {high_x:g}], y in [{low_y:g}, {high_y:g}]) in layout "
-                            f"{where!s}", where)
-        solid = [b for b in on_table if self.bodies[b].kind != "label"]
-        for i, a in enumerate(solid):
-            for b in solid[i + 1:]:
-                pair = self.bodies[a], placed[a], self.bodies[b], placed[b]
-                key = ("overlap", a, placed[a].x, placed[a].y, b, placed[b].x, placed[b].y)
-                if _footprints_overlap(*pair, Jitter(), Jitter()):
-                    self.report(key, "overlap", f"{a} and {b} overlap in layout {where!s}", where)
-                elif _footprints_overlap(*pair, ranges[a], ranges[b]):
-                    self.report(key, "overlap", f"{a} and {b} can overlap in layout {where!s} "
-                                "with the jitter at its extremes", where)
-        for body, at in placed.items():
-            if at.relation == "on" and self.bodies[at.support].kind == "sphere" and not (
-                    {body, at.support} & broken):
-                self.report(("unstable-stack", body, at.support), "unstable-stack",
-                            f"{body} cannot rest on {at.support}, a sphere, in layout "
-                            f"{where!s}", where)
+    @property
+    def troubled(self) -> set[str]:
+        """The layouts with a problem of poses."""
+        return {layout for problem in self.problems.values() for layout in problem.layouts}
 
+    def report_problems(self) -> None:
+        for problem in self.problems.values():
+            first, *others = problem.layouts
+            kept = ""
+            if others:
+                derived = all(self.derives(other, first) for other in others)
+                kept = (f"; {'inherited by' if derived else 'the same in'} "
+                        f"layout{'s' if len(others) > 1 else ''} {', '.join(others)}")
+            self.checks.error(problem.code, problem.message + kept, problem.where)
 
-def _footprints_overlap(a: Body, pa: Placed, b: Body, pb: Placed, ja: Jitter,
-                        jb: Jitter) -> bool:
-    """Whether two footprints can overlap for some offsets within their jitter ranges."""
-    dx = (pa.x - pb.x + ja.x[0] - jb.x[1], pa.x - pb.x + ja.x[1] - jb.x[0])
-    dy = (pa.y - pb.y + ja.y[0] - jb.y[1], pa.y - pb.y + ja.y[1] - jb.y[0])
-    gap_x = 0.0 if dx[0] <= 0 <= dx[1] else min(abs(dx[0]), abs(dx[1]))
-    gap_y = 0.0 if dy[0] <= 0 <= dy[1] else min(abs(dy[0]), abs(dy[1]))
-    round_kinds = ("sphere", "cylinder", "bowl")
-    if a.kind in round_kinds and b.kind in round_kinds:
-        return math.hypot(gap_x, gap_y) < a.half_extents[0] + b.half_extents[0]
-    return (gap_x < a.half_extents[0] + b.half_extents[0]
-            and gap_y < a.half_extents[1] + b.half_extents[1])
+    def derives(self, layout: str, ancestor: str) -> bool:
+        """Whether `layout` is derived (at any depth) from `ancestor`."""
+        seen: set[str] = set()
+        while layout is not None and layout not in seen:
+            seen.add(layout)
+            layout = self.base(layout)
+            if layout == ancestor:
+                return True
+        return False

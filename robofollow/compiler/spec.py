@@ -7,7 +7,6 @@ the world frame (metres): +x to the robot's right, +y away from the robot, +z up
 from __future__ import annotations
 
 import hashlib
-
 from typing import Literal
 
 from robofollow.compiler import lf
@@ -21,6 +20,9 @@ Level = Literal["L0", "L1", "L2", "L3"]
 LEVELS: tuple[Level, ...] = ("L0", "L1", "L2", "L3")
 SPLIT_MOTIONS = ("any", "moved")  # a split rule's `motion=`: every task, or moved ones only
 MOTION_LEVELS: tuple[Level, ...] = ("L1", "L3")  # the levels on changed layouts, which take it
+# a split rule's `repeats=` (L1, L3): a layout it names that looks the same as a training layout
+# is an error, or a distractor-free repeat the rule means
+SPLIT_REPEATS = ("refused", "allowed")
 
 # Limits on what a spec may say, checked when it is loaded (each value at its place in the
 # file): physical bounds keep every number something the simulator, the expert and the
@@ -149,6 +151,11 @@ class SplitRule(Model):
     # L1 / L3: "moved" keeps only tasks whose expert motion differs from the training task's
     # (an as-trained candidate is rejected); "any" keeps both, the paper's definition
     motion: Literal["any", "moved"] = "any"
+    # L1 / L3: "allowed" lets the rule name a layout that looks the same as a training layout
+    repeats: Literal["refused", "allowed"] = "refused"
+
+
+_LATER_SPLIT_FIELDS = ("motion", "repeats")  # left out of a scene's digest at their defaults
 
 
 class Scene(Model):
@@ -170,11 +177,14 @@ class Scene(Model):
     def digest(self) -> str:
         """sha256 over what the scene says (not where: file names and lines are left out), so
         a scene compiled alone or beside others, from any folder, has one digest. A split
-        rule's default motion ("any") is left out, as before the attribute existed."""
+        rule's default motion ("any") and repeats ("refused") are left out, as before the
+        attributes existed."""
         exclude: dict = {"tasks": {"__all__": {"source", "paraphrase_sources"}},
                          "tests": {"__all__": {"source"}}}
-        defaults = {level: {"motion"} for level, rule in self.splits.items()
-                    if rule.motion == "any"}
+        defaults = {level: {key for key in _LATER_SPLIT_FIELDS
+                            if getattr(rule, key) == SplitRule.model_fields[key].default}
+                    for level, rule in self.splits.items()}
+        defaults = {level: keys for level, keys in defaults.items() if keys}
         if defaults:
             exclude["splits"] = defaults
         data = self.model_dump_json(exclude=exclude)

@@ -5,6 +5,7 @@ positions are on the table top, and an attribute is given once."""
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 
 from lark import Token
 
@@ -12,7 +13,9 @@ from robofollow.compiler.spec import Source
 from robofollow.compiler.spec_files import Sources, spec_error
 from robofollow.compiler.spec_syntax import Attribute, Coordinates, Number, Values
 from robofollow.compiler.workspace import table_bounds
-from robofollow.errors import SpecError
+from robofollow.errors import SpecError, did_you_mean
+
+_LISTED = 12  # the known names are listed when there are at most this many
 
 
 class Checks:
@@ -23,11 +26,24 @@ class Checks:
         self.sources = Sources()
         self.file = ""
 
-    def error(self, code: str, message: str, where: Token | Source, length: int | None = None):
+    def error(self, code: str, message: str, where: Token | Source, length: int | None = None,
+              hints: tuple[str, ...] = ()):
         """A problem at a place (a token: the length of the token is underlined)."""
         if isinstance(where, Token):
             where, length = self.source(where), length or len(where)
-        self.errors.append(spec_error(code, message, where, self.sources, length or 1))
+        self.errors.append(spec_error(code, message, where, self.sources, length or 1, hints))
+
+    def unknown_name(self, code: str, kind: str, token: Token, known: Iterable[str],
+                     where: str = "") -> None:
+        """A name not among the `known` names of its kind (in declaration order): the close ones
+        are suggested, or else a short list is shown whole."""
+        known = list(known)
+        hint = did_you_mean(str(token), known)
+        if hint:
+            hint = f"; {hint}"
+        elif 0 < len(known) <= _LISTED:
+            hint = f" (known: {', '.join(known)})"
+        self.error(code, f"no {kind} named {token!s}{where}{hint}", token)
 
     def source(self, token: Token) -> Source:
         return Source(file=self.file, line=token.line, column=token.column)
@@ -39,8 +55,10 @@ class Checks:
         for node in nodes:
             key = node.key
             if key not in allowed:
-                self.error("unknown-attribute", f"unknown attribute {key!s} here (expected one "
-                                                f"of: {', '.join(allowed)})", key)
+                hint = did_you_mean(str(key), allowed)
+                self.error("unknown-attribute", f"unknown attribute {key!s} here"
+                           + (f"; {hint}" if hint else "")
+                           + f" (expected one of: {', '.join(allowed)})", key)
             elif key in found:
                 self.error("duplicate-attribute", f"{key!s} is given twice", key)
             else:

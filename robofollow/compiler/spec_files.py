@@ -118,7 +118,7 @@ def _reread(file: str) -> tuple[str, ...]:
 
 
 def spec_error(code: str, message: str, where: Source, sources: Sources,
-               length: int = 1) -> SpecError:
-    """A SpecError at `where`, showing its source line."""
+               length: int = 1, hints: tuple[str, ...] = ()) -> SpecError:
+    """A SpecError at `where`, showing its source line (and `hints` under it)."""
     return SpecError(code, message, file=where.file, line=where.line, column=where.column,
-                     source_line=sources.line(where), length=length)
+                     source_line=sources.line(where), length=length, hints=hints)

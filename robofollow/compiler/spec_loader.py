@@ -3,11 +3,11 @@
 Each problem is a SpecError with a code ('unknown-object', 'layout-cycle', ...) and the place it
 was written; `load_spec` raises SpecErrors listing all of them. Loading goes on past a problem
 without cascades: a body with a bad attribute is kept (with a stand-in value) so that later
-uses of its name still resolve, and `load_partial` says which layouts hold such a body or did
-not resolve, so that checks of the tasks on them (which would only repeat the problem) are
-skipped while every other task is checked in the same run.
+uses of its name still resolve, and `load_partial` says which layouts hold such a body, have
+a problem of poses or did not resolve, so that checks of the tasks on them (which would only
+repeat the problem) are skipped while every other task is checked in the same run.
 
-Files are read by spec_files.py, parsed by spec_syntax.py and posed by layouts.py; checked
+Files are read by spec_files.py, parsed by spec_parse.py and posed by layouts.py; checked
 here are the scenes: bodies and their attributes, points, jitter, settings, tasks, listed
 tests and split rules, and the counts of bodies and layouts (every number where it is written,
 as spec_checks.py does).
@@ -15,7 +15,6 @@ as spec_checks.py does).
 
 from __future__ import annotations
 
-import difflib
 import hashlib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,6 +23,7 @@ from lark import Token
 
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Step
+from robofollow.compiler.footprints import Footprints
 from robofollow.compiler.layouts import LayoutResolver
 from robofollow.compiler.observation import looks_alike
 from robofollow.compiler.parser import parse
@@ -34,12 +34,7 @@ from robofollow.compiler.spec import (
     MAX_BODIES,
     MAX_JITTER,
     MAX_LAYOUTS,
-    MAX_ROUNDS,
-    MAX_SEED,
-    MAX_TASKS,
-    MOTION_LEVELS,
     RGB_RANGE,
-    SPLIT_MOTIONS,
     TABLE_HEIGHT,
     TABLE_HEIGHT_RANGE,
     YAW_RANGE,
@@ -51,11 +46,11 @@ from robofollow.compiler.spec import (
     Scene,
     Source,
     Spec,
-    SplitRule,
     Task,
 )
-from robofollow.compiler.spec_checks import Checks
 from robofollow.compiler.spec_files import Sources, found_files, spec_text, split_lines
+from robofollow.compiler.spec_parse import parse_spec
+from robofollow.compiler.spec_splits import SplitChecks
 from robofollow.compiler.spec_syntax import (
     Attribute,
     BodyNode,
@@ -71,12 +66,8 @@ from robofollow.compiler.spec_syntax import (
     SplitNode,
     TaskNode,
     TestNode,
-    Values,
-    parse_spec,
 )
 from robofollow.errors import InstructionError, SpecError, SpecErrors
-
-WORDINGS = frozenset({"referents", "routes", "orientation", "conditions", "branches"})
 
 # per body kind: required size attributes -> half extents
 _SIZES = {
@@ -88,16 +79,14 @@ _COMMON = ("color", "rgb")
 _PHYSICS = ("mass", "friction")
 _SETTINGS = {"table_height": TABLE_HEIGHT}
 _SETTING_RANGES = {"table_height": (TABLE_HEIGHT_RANGE, " m")}
-_SPLIT_NUMBERS = {  # attribute -> (SplitRule field, range)
-    "max": ("max_tasks", (1, MAX_TASKS)), "rounds": ("rounds", (1, MAX_ROUNDS)),
-    "seed": ("seed", (0, MAX_SEED))}
 
 
 @dataclass
 class Loaded:
     """What loading gave: the spec as far as it loaded, its problems, the lines of its files
     (for the errors of later checks), and per scene the layouts whose tasks are not worth
-    checking (a body on them is broken, or they did not resolve)."""
+    checking (a body on them is broken, their poses have a problem, or they did not
+    resolve)."""
 
     spec: Spec | None
     errors: list[SpecError]
@@ -118,7 +107,7 @@ def load_spec(paths: list[Path] | Path) -> Spec:
     return loaded.spec
 
 
-class _Loader(Checks):
+class _Loader(SplitChecks):
     def __init__(self):
         super().__init__()
         self.labels: dict[str, Source] = {}  # task label -> where it is defined
@@ -197,12 +186,16 @@ class _Loader(Checks):
         table = settings["table_height"]
         if too_many:
             layouts: dict[str, Layout] = {}
-            defined = {str(item.name) for item in layout_nodes}
+            defined = dict.fromkeys(str(item.name) for item in layout_nodes)
+            troubled: set[str] = set()
         else:
-            resolver = LayoutResolver(self, bodies, points, bad_points, table, jitter,
-                                      self.broken)
+            jitter_at = {str(item.target): item.target for item in by_kind.get(JitterNode, [])}
+            resolver = LayoutResolver(self, bodies, points, bad_points, table,
+                                      Footprints(bodies, jitter, jitter_at, self.broken))
             layouts = resolver.resolve(layout_nodes)
-            defined = set(resolver.raw)  # a layout that failed to resolve is reported once, there
+            # (in declaration order) a layout that failed to resolve is reported once, there
+            defined = dict.fromkeys(resolver.raw)
+            troubled = resolver.troubled
         if not by_kind.get(TaskNode):
             self.error("no-tasks", f"scene {name!s} has no training tasks (write at least one "
                        "task NAME on LAYOUT { \"instruction\" ... })", name)
@@ -216,11 +209,15 @@ class _Loader(Checks):
             if rule.level in splits:
                 self.error("duplicate-split", f"two split rules for {rule.level}", item.level)
             splits[rule.level] = rule
-        self.suspect[str(name)] = {layout for layout in defined if layout not in layouts or any(
-            body in self.broken for body in layouts[layout].placed)}
-        return Scene(id=str(name), title=title[1:-1], bodies=bodies, points=points, jitter=jitter,
-                     layouts=layouts, tasks=tasks, splits=splits, tests=tests,
-                     table_height=table)
+        self.suspect[str(name)] = {layout for layout in defined if layout not in layouts
+                                   or layout in troubled
+                                   or any(body in self.broken for body in layouts[layout].placed)}
+        scene = Scene(id=str(name), title=title[1:-1], bodies=bodies, points=points,
+                      jitter=jitter, layouts=layouts, tasks=tasks, splits=splits, tests=tests,
+                      table_height=table)
+        self.repeated_layouts(scene, {str(item.name): item.name for item in layout_nodes},
+                              self.suspect[scene.id])
+        return scene
 
     def points(self, items: list[PointNode]
                ) -> tuple[dict[str, tuple[float, float]], set[str]]:
@@ -258,8 +255,7 @@ class _Loader(Checks):
     def setting(self, item: SettingNode, settings: dict[str, float], seen: set[str]) -> None:
         name = item.name
         if name not in settings:
-            self.error("unknown-setting", f"unknown setting {name!s} (known: "
-                                          f"{', '.join(sorted(settings))})", name)
+            self.unknown_name("unknown-setting", "setting", name, settings)
             return
         if name in seen:
             self.error("duplicate-setting", f"{name!s} is set twice", name)
@@ -286,9 +282,10 @@ class _Loader(Checks):
         sizes = _SIZES[str(kind)] if known else tuple(dict.fromkeys(
             a for names in _SIZES.values() for a in names))
         allowed = sizes + _COMMON + (() if fixture else _PHYSICS)
+        errors_before = len(self.errors)
         found = self.attributes(item.attributes, allowed)
         missing = [a for a in allowed if a not in found and (known or a not in sizes)]
-        if missing:
+        if missing and len(self.errors) == errors_before:  # (else it may be one misspelt)
             self.error("missing-attribute", f"{name!s} needs {', '.join(missing)}", name)
         color = found["color"].value if "color" in found else None
         if color is not None and (not isinstance(color, Name)
@@ -335,7 +332,7 @@ class _Loader(Checks):
                            target)
                 continue
             if target != "*" and target not in bodies:
-                self.error("unknown-object", f"no object named {target!s}", target)
+                self.unknown_name("unknown-object", "object", target, bodies)
             ranges = self.jitter(item.attributes)
             if ranges is None:
                 bad.add(str(target))
@@ -369,7 +366,7 @@ class _Loader(Checks):
 
     # ---------------------------------------------------------------- tasks and splits
     def task(self, item: TaskNode, scene: str, bodies: dict[str, Body],
-             layouts: set[str]) -> Task | None:
+             layouts: dict[str, None]) -> Task | None:
         label, layout, strings, expect = item.label, item.layout, item.strings, item.expect
         ok = True
         if label in self.labels:
@@ -378,7 +375,7 @@ class _Loader(Checks):
             ok = False
         self.labels.setdefault(str(label), self.source(label))
         if layout not in layouts:
-            self.error("undefined-layout", f"no layout named {layout!s} in {scene}", layout)
+            self.unknown_name("undefined-layout", "layout", layout, layouts, f" in {scene}")
             ok = False
         forms = [self.instruction(string) for string in strings]
         ok = ok and None not in forms
@@ -398,11 +395,12 @@ class _Loader(Checks):
         except InstructionError as error:
             self.error(f"instruction-{error.code}", error.message,
                        Source(file=self.file, line=string.line,
-                              column=string.column + error.column), error.length)
+                              column=string.column + error.column), error.length,
+                       tuple(error.hints()))
             return None
 
     def test(self, item: TestNode, scene: str, bodies: dict[str, Body],
-             layouts: set[str]) -> ListedTest | None:
+             layouts: dict[str, None]) -> ListedTest | None:
         level, name, layout, string, expect = (item.level, item.name, item.layout, item.string,
                                                item.expect)
         ok = True
@@ -413,7 +411,7 @@ class _Loader(Checks):
             ok = False
         self.tests.setdefault(test_id, self.source(name))
         if layout not in layouts:
-            self.error("undefined-layout", f"no layout named {layout!s} in {scene}", layout)
+            self.unknown_name("undefined-layout", "layout", layout, layouts, f" in {scene}")
             ok = False
         ok = self.instruction(string) is not None and ok
         expected = self.expected(expect, bodies) if expect is not None else None
@@ -432,67 +430,17 @@ class _Loader(Checks):
                      *(w.name for w in step.waypoints)]
             for token in names:
                 if token not in bodies:
-                    self.error("unknown-object", f"no object named {token!s}", token)
+                    self.unknown_name("unknown-object", "object", token, bodies)
             yaw = None if step.yaw is None else self.checked(step.yaw, "yaw", YAW_RANGE,
                                                              " degrees")
-            steps.append(dict(action=step.action, arm=str(step.arm), source=str(step.source),
-                              relation=None if step.relation is None else str(step.relation),
-                              target=None if step.target is None else str(step.target),
-                              waypoints=tuple(sorted((str(w.kind), str(w.name))
-                                                     for w in step.waypoints)),
-                              yaw_degrees=yaw))
+            steps.append({"action": step.action, "arm": str(step.arm),
+                          "source": str(step.source),
+                          "relation": None if step.relation is None else str(step.relation),
+                          "target": None if step.target is None else str(step.target),
+                          "waypoints": tuple(sorted((str(w.kind), str(w.name))
+                                                    for w in step.waypoints)),
+                          "yaw_degrees": yaw})
         if len(self.errors) > errors_before:
             return None
         return Expected(branch=None if node.branch is None else str(node.branch),
                         steps=tuple(Step(**s) for s in steps))
-
-    def split(self, item: SplitNode, layouts: set[str]) -> SplitRule:
-        found = self.attributes(item.attributes,
-                                ("layouts", "wordings", "max", "rounds", "seed", "motion"))
-        values: dict = {"level": str(item.level)}
-        for key in ("layouts", "wordings"):
-            if key in found:
-                value = found[key].value
-                names = value.items if isinstance(value, Values) else (value,)
-                if not all(isinstance(n, Name) for n in names):
-                    self.error("bad-value", f"{key} takes names: {key}=(a, b, ...)",
-                               found[key].key)
-                    continue
-                tokens = [n.token for n in names]
-                known = layouts if key == "layouts" else WORDINGS
-                for token in tokens:
-                    if token not in known:
-                        code = "undefined-layout" if key == "layouts" else "unknown-wording"
-                        self.error(code, f"unknown {key[:-1]} {token!s} (known: "
-                                         f"{', '.join(sorted(known))})", token)
-                values[key] = tuple(str(t) for t in tokens)
-        for key, (name, bounds) in _SPLIT_NUMBERS.items():
-            if key in found:
-                number = self.number(found[key], bounds, whole=True)
-                if number is not None:
-                    values[name] = int(number)
-        if "motion" in found:
-            motion = self.split_motion(found["motion"], str(item.level))
-            if motion is not None:
-                values["motion"] = motion
-        return SplitRule(**values)
-
-    def split_motion(self, node: Attribute, level: str) -> str | None:
-        """A split rule's `motion=`: one of SPLIT_MOTIONS, on a level of changed layouts."""
-        if level not in MOTION_LEVELS:
-            self.error("unknown-attribute", f"motion applies to {' and '.join(MOTION_LEVELS)} "
-                       f"(the levels on changed layouts), not to {level}", node.key)
-            return None
-        known = " | ".join(SPLIT_MOTIONS)
-        if not isinstance(node.value, Name):
-            self.error("bad-value", f"motion takes a name: motion={known}", node.key)
-            return None
-        token = node.value.token
-        if token not in SPLIT_MOTIONS:
-            close = difflib.get_close_matches(str(token), SPLIT_MOTIONS, n=1, cutoff=0.5)
-            hint = f"did you mean {close[0]}? " if close else ""
-            self.error("bad-value", f"unknown motion {token!s}; {hint}(known: {known}: every "
-                       "task, or only those whose expert motion differs from the training "
-                       "task's)", token)
-            return None
-        return str(token)

@@ -1,6 +1,6 @@
-"""The spec grammar (grammar/spec.lark): a file's text -> small syntax records (built by a
-Transformer applied inline while the LALR parser reduces), or the syntax error at the first
-place it fails.
+"""The spec grammar (grammar/spec.lark): a file's text -> small syntax records, built by a
+Transformer applied inline while the LALR parser reduces (spec_parse.py parses, and says
+where and why a text does not).
 
 The records keep the tokens as written (each knows its line and column, for errors); what they
 mean is checked in spec_loader.py and layouts.py.
@@ -11,19 +11,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import cache
 
-from lark import (
-    Lark,
-    Token,
-    Transformer,
-    UnexpectedCharacters,
-    UnexpectedEOF,
-    UnexpectedToken,
-    v_args,
-)
+from lark import Lark, Token, Transformer, v_args
 
-from robofollow.compiler.spec import Source
-from robofollow.compiler.spec_files import Sources, spec_error, split_lines
-from robofollow.errors import SpecError
 from robofollow.resources import grammar_text
 
 # ---------------------------------------------------------------- values
@@ -280,38 +269,10 @@ class _ToNodes(Transformer):
         return SplitNode(level, attributes)
 
 
-# ---------------------------------------------------------------- parsing
+# ---------------------------------------------------------------- the parser
 
 
 @cache
-def _parser() -> Lark:
+def spec_parser() -> Lark:
+    """The spec grammar's LALR parser, building the records above as it reduces."""
     return Lark(grammar_text("spec.lark"), parser="lalr", strict=True, transformer=_ToNodes())
-
-
-def parse_spec(text: str, file: str, sources: Sources) -> list[SceneNode] | SpecError:
-    """The scenes of a spec file's text, or its syntax error."""
-    try:
-        return _parser().parse(text)
-    except (UnexpectedEOF, UnexpectedToken) as error:
-        if isinstance(error, UnexpectedEOF) or error.token.type == "$END":
-            lines = split_lines(text.rstrip())
-            return SpecError("syntax", "the file ends too early" + _expected(error.expected),
-                             file=file, line=len(lines), column=len(lines[-1]) + 1,
-                             source_line=lines[-1])
-        token = error.token
-        return spec_error("syntax", f"unexpected {token!s:.30}" + _expected(error.expected),
-                          Source(file=file, line=token.line, column=token.column), sources,
-                          len(token))
-    except UnexpectedCharacters as error:
-        return spec_error("syntax", f"unexpected character {text[error.pos_in_stream]!r}"
-                          + _expected(error.allowed),
-                          Source(file=file, line=error.line, column=error.column), sources)
-
-
-def _expected(terminals) -> str:
-    """Expected terminals as a reader knows them: '}' rather than RBRACE."""
-    names = []
-    for name in sorted(terminals):
-        pattern = _parser().get_terminal(name).pattern
-        names.append(repr(pattern.value) if pattern.type == "str" else name.lower())
-    return f" (expected: {', '.join(sorted(names)[:12])})" if names else ""
