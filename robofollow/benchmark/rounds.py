@@ -79,5 +79,6 @@ def unknown_episode(episode_id: str, task_ids: list[str]) -> UnknownEpisodeError
     """The error for an episode id the benchmark lacks, with the nearest task ids."""
     close = difflib.get_close_matches(episode_id.partition("#")[0], task_ids, n=3)
     hint = f"; did you mean {', '.join(c + '#r1' for c in close)}?" if close else ""
-    return UnknownEpisodeError(f"no episode {episode_id!r} in the compiled benchmark (ids look "
-                               f"like scene1/L0/pickup_yellow_block_2#r1){hint}")
+    like = f"ids look like {task_ids[0]}#r1" if task_ids else "it has no test tasks"
+    return UnknownEpisodeError(f"no episode {episode_id!r} in the compiled benchmark "
+                               f"({like}){hint}")

@@ -5,15 +5,17 @@ from __future__ import annotations
 from robofollow.audit.splits import FINDING_KEYS
 from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.spec import LEVELS, MOTION_LEVELS
+from robofollow.errors import counted
 
 
 def summary(compiled: Compiled, changes: str = "") -> str:
     report, spec = compiled.report, compiled.spec
-    lines = [f"RoboFollow: {len(spec.scenes)} scenes, {len(spec.tasks)} training tasks, "
-             f"spec digest {spec.digest[:12]}",
-             f"scene entropy H(T|S) = {report['scene_entropy_bits']:.3f} bits over "
-             f"{len(report['groups'])} training scene groups (task labels, as the paper counts); "
-             f"over distinct behaviours H(B|S) = {report['behaviour_entropy_bits']:.3f} bits",
+    lines = [(f"RoboFollow: {counted(len(spec.scenes), 'scene')}, "
+             f"{counted(len(spec.tasks), 'training task')}, spec digest {spec.digest[:12]}"),
+             (f"scene entropy H(T|S) = {report['scene_entropy_bits']:.3f} bits over "
+             f"{counted(len(report['groups']), 'training scene group')} (task labels, as the "
+             "paper counts); "
+             f"over distinct behaviours H(B|S) = {report['behaviour_entropy_bits']:.3f} bits"),
              "split digests: " + ", ".join(f"{scene} {digest[:12]}"
                                            for scene, digest in compiled.split_digests.items()),
              "", "test tasks per scene and level (each run for the split's rounds):",
@@ -80,8 +82,8 @@ def changes(before: set[str], compiled: Compiled, shown: int = 20) -> str:
     added, removed = sorted(after - before), sorted(before - after)
     if not added and not removed:
         return "\nagainst the previous build: the same test tasks\n"
-    lines = ["", f"against the previous build: {len(added)} test tasks added, {len(removed)} "
-                 "removed"]
+    lines = ["", (f"against the previous build: {counted(len(added), 'test task')} added, "
+                 f"{len(removed)} removed")]
     lines += [f"  + {task}" for task in added[:shown]]
     lines += [f"  - {task}" for task in removed[:shown]]
     if max(len(added), len(removed)) > shown:

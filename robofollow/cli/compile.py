@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from robofollow.cli.common import specs_argument, specs_of
-from robofollow.errors import RoboFollowError
+from robofollow.errors import RoboFollowError, counted
 
 
 def add_compile(commands) -> None:
@@ -71,7 +71,7 @@ def cmd_compile(args) -> int:
     ok = clean(compiled) and verified
     if args.update_lock and ok:
         write_lock(lock, compiled)
-        print(f"pinned {len(compiled.spec.scenes)} scenes' splits in {lock}")
+        print(f"pinned the splits of {counted(len(compiled.spec.scenes), 'scene')} in {lock}")
     elif args.update_lock:
         print(f"{lock} left as it was: the build has findings or failed verification")
     return 0 if ok else 1
@@ -85,9 +85,8 @@ def _verify(compiled, specs: Path, rounds: int, workers: int | None,
     from robofollow.eval.verify import run_expert_episodes
 
     episodes = [e for e in all_episodes(compiled) if e.round <= rounds and e.scene in scenes]
-    print(f"\nverifying {', '.join(scenes)}: the expert on {len(episodes)} episodes ({rounds} "
-          f"round{'s' if rounds > 1 else ''} of every test task) in simulation "
-          "(--no-verify skips it)")
+    print(f"\nverifying {', '.join(scenes)}: the expert on {counted(len(episodes), 'episode')} "
+          f"({counted(rounds, 'round')} of every test task) in simulation (--no-verify skips it)")
     results = run_expert_episodes(specs, episodes, workers or os.cpu_count() or 1)
     failures = [r for r in results if not r["full"]]
     print(f"the expert scored in full on {len(results) - len(failures)} of {len(results)}; "
@@ -153,8 +152,8 @@ def _task_list_text(path: str, listed: dict) -> str:
     from robofollow.audit.task_list import FINDING_KINDS
 
     findings = listed["findings"]
-    lines = ["", f"task list {path}: {listed['checked']} tasks checked, "
-                 f"{len(findings) or 'no'} finding{'' if len(findings) == 1 else 's'}"]
+    lines = ["", (f"task list {path}: {counted(listed['checked'], 'task')} checked, "
+                 f"{counted(len(findings), 'finding') if findings else 'no findings'}")]
     for kind in FINDING_KINDS:
         items = [f for f in findings if f["kind"] == kind]
         if items:
