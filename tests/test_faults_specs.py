@@ -141,19 +141,19 @@ def structure() -> list[Case]:
               '    }}\n')
     cases = [
         (base, "\n".join(chain), "too-many-layouts", "3000-derived-layouts"),
-        (base, "    layout swapped from base { swap red_cube blue_cube }\n"
+        (base, ("    layout swapped from base { swap red_cube blue_cube }\n"
                f"    layout {MARK}a from c {{ }}\n    layout b from a {{ }}\n"
-               "    layout c from b { }", "layout-cycle", "derivation-cycle"),
+               "    layout c from b { }"), "layout-cycle", "derivation-cycle"),
         ("    jitter *", cubes + "\n    jitter *", "too-many-bodies", "1500-bodies"),
         ("    jitter *", cubes + "\n    jitter *", "too-many-bodies", "1500-body-stack"),
-        ("    layout base {\n        red_cube", f"{tall}\n    layout base {{\n"
-         f"        c0 at (0.2, -0.2)\n{tall_stack}\n        red_cube", "stack-too-tall",
+        ("    layout base {\n        red_cube", (f"{tall}\n    layout base {{\n"
+         f"        c0 at (0.2, -0.2)\n{tall_stack}\n        red_cube"), "stack-too-tall",
          "stack-taller-than-the-limit"),
-        ("        bowl at (0.0, -0.15)", "        bowl at (0.0, -0.15)\n        red_cube on bowl\n"
-         f"        bowl on blue_cube\n        {MARK}blue_cube on red_cube", "support-cycle",
+        ("        bowl at (0.0, -0.15)", ("        bowl at (0.0, -0.15)\n        red_cube on bowl\n"
+         f"        bowl on blue_cube\n        {MARK}blue_cube on red_cube"), "support-cycle",
          "support-cycle-of-three"),
-        ("    object blue_cube", f"    object {MARK}red_cube sphere radius=0.02 color=red "
-         "rgb=(1, 0, 0) mass=0.2 friction=0.1\n    object blue_cube", "duplicate-object",
+        ("    object blue_cube", (f"    object {MARK}red_cube sphere radius=0.02 color=red "
+         "rgb=(1, 0, 0) mass=0.2 friction=0.1\n    object blue_cube"), "duplicate-object",
          "duplicate-object"),
         (base, f"{base}\n    layout {MARK}swapped {{ red_cube at (0.1, 0.1) }}",
          "duplicate-layout", "duplicate-layout"),
@@ -165,8 +165,8 @@ def structure() -> list[Case]:
          "duplicate-attribute", "duplicate-attribute"),
         ("    layout base", f"    jitter {MARK}* x=[-0.01, 0.01]\n    layout base",
          "duplicate-jitter", "duplicate-jitter"),
-        ("    jitter *", f"    set table_height = 0.74\n    set {MARK}table_height = 0.75\n"
-         "    jitter *", "duplicate-setting", "duplicate-setting"),
+        ("    jitter *", (f"    set table_height = 0.74\n    set {MARK}table_height = 0.75\n"
+         "    jitter *"), "duplicate-setting", "duplicate-setting"),
         ("    split", listed.format("") + listed.format(MARK) + "    split", "duplicate-test",
          "duplicate-test"),
         ("cube half=0.02 color=red", f"cube half=0.02 {MARK}colour=red color=red",
@@ -296,7 +296,7 @@ def test_the_real_exit_status(case_id, tmp_path):
     file, line, column = make(tmp_path / "specs", case)
     result = subprocess.run([sys.executable, "-m", "robofollow.cli", "compile",
                              str(tmp_path / "specs"), "--out", str(tmp_path / "out")],
-                            capture_output=True, text=True, timeout=120)
+                            check=False, capture_output=True, text=True, timeout=120)
     assert result.returncode == 1
     assert result.stderr.startswith(f"{file}:{line}:{column}: error[{case.code}]")
     assert "Traceback" not in result.stderr and SECRET not in result.stderr
