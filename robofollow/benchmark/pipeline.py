@@ -50,6 +50,11 @@ class Compiled:
         return json.loads(self.audit_json)
 
     @cached_property
+    def scene_digests(self) -> Mapping[str, str]:
+        """Each scene's `Scene.digest`, computed once (every episode record hashes it)."""
+        return MappingProxyType({scene.id: scene.digest for scene in self.spec.scenes.values()})
+
+    @cached_property
     def split_digests(self) -> Mapping[str, str]:
         """Each scene's split digest: sha256 over the scene's digest and its test tasks in
         order, so it changes when, and only when, that scene's tests or what they start from
@@ -57,7 +62,7 @@ class Compiled:
         digests = {}
         for scene in self.spec.scenes.values():
             tasks = [t.model_dump_json() for t in self.splits.tasks if t.scene == scene.id]
-            content = "\n".join([scene.digest, *tasks])
+            content = "\n".join([self.scene_digests[scene.id], *tasks])
             digests[scene.id] = hashlib.sha256(content.encode()).hexdigest()
         return MappingProxyType(digests)
 
