@@ -29,6 +29,7 @@ from robofollow.benchmark.episode import Episode
 from robofollow.compiler.spec import LEVELS, Spec
 from robofollow.compiler.spec_files import spec_files
 from robofollow.files import json_line
+from robofollow.resources import cache_root
 
 FORMAT = 1  # bump when the file layout or the records' meaning changes
 KEEP = 8  # cache files kept (the newest); older ones are removed when one is written
@@ -78,11 +79,8 @@ def _unknown(episode_id: str, ids: tuple[str, ...]) -> Exception:
 
 def cache_dir() -> Path | None:
     """Where compiled benchmarks are kept; None when ROBOFOLLOW_NO_CACHE turns the cache off."""
-    if os.environ.get("ROBOFOLLOW_NO_CACHE", "") not in ("", "0"):
-        return None
-    root = os.environ.get("ROBOFOLLOW_CACHE_DIR") or Path(
-        os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "robofollow"
-    return Path(root) / "compiled"
+    root = cache_root()
+    return root / "compiled" if root else None
 
 
 def code_files() -> list[Path]:
