@@ -17,7 +17,7 @@ from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.spec import Spec
 from robofollow.compiler.spec_files import spec_files
 from robofollow.compiler.spec_loader import load_partial
-from robofollow.compiler.splits import Splits, generate
+from robofollow.compiler.splits import Splits, generate_examined
 from robofollow.compiler.training import training_behaviours
 from robofollow.errors import SpecErrors
 
@@ -108,8 +108,8 @@ def _compile(specs: Path | list[Path]) -> Compiled:
     errors = loaded.errors + training_errors + test_errors
     if errors:
         raise SpecErrors(errors)
-    splits = generate(spec, training, listed)
-    return Compiled.of(spec, splits, training, audit(spec, training, splits))
+    splits, examined = generate_examined(spec, training, listed)
+    return Compiled.of(spec, splits, training, audit(spec, training, splits, examined))
 
 
 def clean(compiled: Compiled) -> bool:

@@ -276,6 +276,15 @@ def generate(spec: Spec, training: dict[str, Behaviour], listed: tuple[TestTask,
              levels: tuple[Level, ...] = ("L0", "L1", "L2", "L3")) -> Splits:
     """Test tasks for the given levels of every scene (the spec's `listed` tests included),
     with every rejected candidate. Each scene is generated from its own spec alone."""
+    return generate_examined(spec, training, listed, levels)[0]
+
+
+def generate_examined(spec: Spec, training: dict[str, Behaviour],
+                      listed: tuple[TestTask, ...] = (),
+                      levels: tuple[Level, ...] = ("L0", "L1", "L2", "L3")
+                      ) -> tuple[Splits, frozenset[TestTask]]:
+    """`generate`, and the test tasks it examined by every rule of task_rules.py and kept
+    (all but the listed ones): their verdicts, for the audit of these splits."""
     tasks: list[TestTask] = []
     rejected: list[Rejection] = []
     for scene in spec.scenes.values():
@@ -283,4 +292,5 @@ def generate(spec: Spec, training: dict[str, Behaviour], listed: tuple[TestTask,
         generator.run(levels)
         tasks += generator.tasks
         rejected += generator.rejected
-    return Splits(tasks=tuple(tasks), rejected=tuple(rejected))
+    examined = frozenset(task for task in tasks if task.wording != "listed")
+    return Splits(tasks=tuple(tasks), rejected=tuple(rejected)), examined
