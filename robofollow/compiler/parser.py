@@ -7,23 +7,19 @@ the hot path (the interactive parser, for error suggestions, is lark's own).
 
 from __future__ import annotations
 
-import hashlib
-import os
-import secrets
-import sys
 from functools import cache
 
-import lark
 from lark import Lark, UnexpectedToken
 from lark.lexer import Lexer
 from lark.parsers.lalr_analysis import Shift
 
 from robofollow.compiler import lf
+from robofollow.compiler.lark_tables import cached_lark
 from robofollow.compiler.lexicon import VOCABULARY, WordToken, tokenize, words_of
 from robofollow.compiler.semantics import Semantics
 from robofollow.compiler.syntax import ToSyntax
 from robofollow.errors import InstructionError, UngrammaticalError, UnknownWordError
-from robofollow.resources import cache_root, grammar_text
+from robofollow.resources import grammar_text
 
 # How an expected terminal is named in error messages (others list their words).
 _TERMINAL_NAMES = {
@@ -49,30 +45,9 @@ class _WordLexer(Lexer):
 
 @cache
 def _lark() -> Lark:
-    """The parser. Building its tables takes about a second, so they are kept in the cache
-    folder (resources.cache_root), named by what they are built from; lark checks a file's
-    hash when it reads it and builds the tables again when it does not match. A new file is
-    written under a temporary name and renamed into place, so readers never see half of one."""
-    grammar = grammar_text("instruction.lark")
-    options = {"parser": "lalr", "lexer": _WordLexer, "transformer": ToSyntax(), "strict": True}
-    root = cache_root()
-    if root is None:
-        return Lark(grammar, **options)
-    built_from = f"{grammar}\0{lark.__version__}\0{sys.version}"
-    path = root / "parser" / f"instruction-{hashlib.sha256(built_from.encode()).hexdigest()}"
-    if path.is_file():
-        return Lark(grammar, cache=str(path), **options)
-    partial = path.with_name(f".{path.name}.{os.getpid()}-{secrets.token_hex(4)}")
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError:  # not writable: build them every time
-        return Lark(grammar, **options)
-    parser = Lark(grammar, cache=str(partial), **options)
-    try:
-        os.replace(partial, path)
-    except OSError:
-        partial.unlink(missing_ok=True)
-    return parser
+    """The parser (its tables from the cache folder: lark_tables.py)."""
+    return cached_lark("instruction", grammar_text("instruction.lark"), lexer=_WordLexer,
+                       transformer=ToSyntax(), strict=True)
 
 
 @cache
