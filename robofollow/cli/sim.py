@@ -78,7 +78,6 @@ def cmd_expert(args) -> int:
     from robofollow.sim.cameras import side_by_side
     from robofollow.sim.rollout import run_expert
     from robofollow.sim.simulation import CONTROL_HZ
-    from robofollow.sim.video import write_video
 
     benchmark = load(specs_of(args))
     episode = benchmark.record(args.episode)
@@ -88,6 +87,8 @@ def cmd_expert(args) -> int:
                         (lambda images: frames.append(side_by_side(images))) if args.video
                         else None, width, height)
     if args.video:
+        from robofollow.sim.video import write_video  # (PyAV: only for a video)
+
         write_video(args.video, frames, CONTROL_HZ)
     if args.trajectory:
         result.trajectory.save(args.trajectory)
