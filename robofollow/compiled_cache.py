@@ -1,16 +1,22 @@
-"""The compiled benchmark as an env reads it, cached on disk so that an env starts without
-compiling the specs (seconds) every time.
+"""The compiled benchmark as an env reads it, cached on disk per spec file, so that an env
+starts without compiling the specs (seconds) and an edited spec compiles only its own scenes.
 
-An env needs the spec (its scenes) and the episode records. They are kept in one JSON Lines
-file per key, `<cache>/compiled/<key>.jsonl`: a header (format, key, episode ids, the sha256 of
-the rest), the spec, then one episode per line as the build writes `episodes/*.jsonl`; an
-episode is parsed when asked for. The key is a sha256 over the specs' path, every spec file's
-name and bytes, FORMAT, RoboFollow's version and the compiler's code and grammars (SOURCES), so
-a change to any of them compiles again. A file is written to a temporary name and renamed into
-place; one that does not verify (corrupt, truncated, stale) is compiled again and replaced.
+An env needs the spec (its scenes), each scene's training behaviours ('did instead') and the
+episode records. A scene's splits depend on its own spec alone, so each .rf file is compiled
+by itself and kept in one JSON Lines file, `<cache>/compiled/<path>-<spec>-<code>.jsonl`
+(16 hex digits of the sha256 of the file's path, of its bytes and of `code_digest`): a
+header (format, key, episode ids, the sha256 of the rest), the file's scenes and their
+training behaviours, then one episode per line as the build writes `episodes/*.jsonl`; an
+episode is parsed when asked for. The key is a sha256 over the code digest (FORMAT,
+RoboFollow's version, the compiler's code and grammars: SOURCES), the file's path and its
+bytes, so a change to any of them compiles that file again. A file is written to a temporary
+name and renamed into place; one that does not verify (corrupt, truncated, stale) is compiled
+again and replaced. A load that compiles says so on stderr, naming the scenes and why.
 
-`<cache>` is $ROBOFOLLOW_CACHE_DIR, else $XDG_CACHE_HOME/robofollow, else ~/.cache/robofollow;
-ROBOFOLLOW_NO_CACHE=1 turns the disk cache off (each process then compiles once).
+Specs that only load together are compiled together, uncached: an unreadable file, a link in
+the folder, a scene or task label defined in two files, a spec with errors (they are reported
+for every file at once). `<cache>` is resources.cache_root(); ROBOFOLLOW_NO_CACHE=1 turns the
+disk cache off (each process then compiles once).
 """
 
 from __future__ import annotations
@@ -19,6 +25,7 @@ import hashlib
 import json
 import os
 import secrets
+import sys
 import warnings
 from dataclasses import dataclass
 from functools import cache, cached_property, lru_cache
@@ -26,12 +33,14 @@ from importlib import metadata
 from pathlib import Path
 
 from robofollow.benchmark.episode import Episode
-from robofollow.compiler.spec import LEVELS, Spec
+from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.spec import LEVELS, Scene, Spec
 from robofollow.compiler.spec_files import spec_files
 from robofollow.files import json_line
+from robofollow.resources import cache_root
 
-FORMAT = 1  # bump when the file layout or the records' meaning changes
-KEEP = 8  # cache files kept (the newest); older ones are removed when one is written
+FORMAT = 2  # bump when the file layout or the records' meaning changes
+KEEP = 64  # cache files kept (the newest); older ones are removed when one is written
 # the code the compile runs, under robofollow/ (a test checks that these are the modules the
 # cached compile imports, and beside them only the rest of the compiler): a change to it, and
 # only to it, compiles again
@@ -41,11 +50,23 @@ SOURCES = ("benchmark/__init__.py", "benchmark/episode.py", "benchmark/pipeline.
 
 
 @dataclass(frozen=True)
+class Part:
+    """What one spec file compiles to: its scenes, their training behaviours by label, and
+    their episodes (ids, and records as JSON lines)."""
+
+    scenes: dict[str, Scene]
+    training: dict[str, Behaviour]
+    ids: tuple[str, ...]
+    lines: tuple[bytes, ...]
+
+
+@dataclass(frozen=True)
 class Episodes:
-    """The spec and every episode (in `benchmark.rounds.all_episodes` order), each parsed when asked
-    for (a fresh object every time)."""
+    """The spec, the training behaviours and every episode (in `benchmark.rounds.all_episodes`
+    order), each parsed when asked for (a fresh object every time)."""
 
     spec: Spec
+    training: dict[str, Behaviour]
     ids: tuple[str, ...]
     lines: tuple[bytes, ...]
 
@@ -58,6 +79,10 @@ class Episodes:
         if episode_id not in self.index:
             raise _unknown(episode_id, self.ids)
         return Episode.model_validate_json(self.lines[self.index[episode_id]])
+
+    def candidates(self, scene: str) -> dict[str, Behaviour]:
+        """The scene's training behaviours by label (as `Compiled.candidates`)."""
+        return {t.label: self.training[t.label] for t in self.spec.scenes[scene].tasks}
 
     def select(self, scene: str | None = None, level: str | None = None) -> tuple[str, ...]:
         """The ids of the episodes of a scene and a level (None: any)."""
@@ -78,11 +103,8 @@ def _unknown(episode_id: str, ids: tuple[str, ...]) -> Exception:
 
 def cache_dir() -> Path | None:
     """Where compiled benchmarks are kept; None when ROBOFOLLOW_NO_CACHE turns the cache off."""
-    if os.environ.get("ROBOFOLLOW_NO_CACHE", "") not in ("", "0"):
-        return None
-    root = os.environ.get("ROBOFOLLOW_CACHE_DIR") or Path(
-        os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "robofollow"
-    return Path(root) / "compiled"
+    root = cache_root()
+    return root / "compiled" if root else None
 
 
 def code_files() -> list[Path]:
@@ -112,70 +134,162 @@ def _version() -> str:
         return "unknown"
 
 
-def key(specs: Path) -> str:
-    """The cache key of a specs folder (or file) as it is now."""
-    specs = Path(os.path.realpath(specs))
-    digest = hashlib.sha256(f"{code_digest()}\0{specs}\0".encode())
-    for path in spec_files(specs):
-        name = path.relative_to(specs) if path != specs else path.name
-        digest.update(f"{name}\0".encode() + path.read_bytes() + b"\0")
-    return digest.hexdigest()
+def _sha(data: str | bytes) -> str:
+    return hashlib.sha256(data.encode() if isinstance(data, str) else data).hexdigest()
+
+
+@dataclass(frozen=True)
+class Entry:
+    """A spec file as it is now: its path, bytes and cache key."""
+
+    file: Path
+    data: bytes
+
+    @cached_property
+    def key(self) -> str:
+        return _sha(f"{code_digest()}\0{self.file}\0".encode() + self.data)
+
+    @property
+    def name(self) -> str:
+        """The cache file's name: path, spec and code (see the module docstring)."""
+        return f"{self.stem}-{_sha(self.data)[:16]}-{code_digest()[:16]}.jsonl"
+
+    @property
+    def stem(self) -> str:
+        return _sha(str(self.file))[:16]
 
 
 def load(specs: Path) -> Episodes:
-    """The compiled benchmark of `specs`: from the cache when it holds it, else compiled (and
-    cached). Raises SpecErrors on bad specs; a cache that cannot be read or written is only
-    passed over."""
+    """The compiled benchmark of `specs` (a folder or a file): each spec file's part from the
+    cache when it holds it, else compiled (and cached). Raises SpecErrors on bad specs; a cache
+    that cannot be read or written is only passed over."""
     specs = Path(os.path.realpath(specs))
+    files = spec_files(specs)
     try:
-        digest = key(specs)
+        entries = tuple(Entry(file, file.read_bytes()) for file in files)
     except OSError:  # an unreadable spec file: the compile says so
-        return _parse(_compile(specs, ""), "")
-    return _load(specs, digest, cache_dir())
+        return _whole(specs)
+    if not entries or any(file.is_symlink() for file in files):
+        return _whole(specs)
+    return _assemble(specs, entries, cache_dir())
 
 
 @lru_cache(maxsize=4)
-def _load(specs: Path, digest: str, folder: Path | None) -> Episodes:
-    """One read (or compile) per specs state and cache folder, per process."""
-    path = folder / f"{digest}.jsonl" if folder else None
+def _assemble(specs: Path, entries: tuple[Entry, ...], folder: Path | None) -> Episodes:
+    """The parts put together (one read or compile per specs state and cache folder, per
+    process), as one compile of the whole folder gives them."""
+    parts, compiled, cached = [], [], 0
+    for entry in entries:
+        part, why = _part(entry, folder)
+        if part is None:
+            return _whole(specs)
+        parts.append(part)
+        if why:
+            compiled.append(f"{', '.join(part.scenes)} ({why})")
+        else:
+            cached += len(part.scenes)
+    scenes = [scene for part in parts for scene in part.scenes]
+    labels = [label for part in parts for label in part.training]
+    if len(set(scenes)) != len(scenes) or len(set(labels)) != len(labels):
+        return _whole(specs)  # (the compile reports what is defined twice)
+    if compiled:
+        tail = f", {cached} scene{'' if cached == 1 else 's'} from cache" if cached else ""
+        print(f"compiled {', '.join(compiled)}{tail}", file=sys.stderr)
+    digest = hashlib.sha256()
+    for entry in entries:  # as the spec loader's digest: each file's name and text
+        digest.update(entry.file.name.encode() + b"\0" + entry.data + b"\0")
+    spec = Spec(scenes={s: scene for part in parts for s, scene in part.scenes.items()},
+                digest=digest.hexdigest())
+    return Episodes(spec, {label: b for part in parts for label, b in part.training.items()},
+                    tuple(i for part in parts for i in part.ids),
+                    tuple(line for part in parts for line in part.lines))
+
+
+def _part(entry: Entry, folder: Path | None) -> tuple[Part | None, str | None]:
+    """One spec file's part and why it was compiled (None: read from the cache); no part when
+    the file does not compile alone."""
+    path = folder / entry.name if folder else None
     if path is not None:
         try:
-            return _parse(path.read_bytes(), digest)
-        except Exception:  # missing, corrupt, truncated or stale: compile it again
-            pass
-    data = _compile(specs, digest)
+            return _parse(path.read_bytes(), entry.key), None
+        except (OSError, ValueError, KeyError, TypeError):  # missing, corrupt, stale
+            why = _why(folder, entry)
+    else:
+        why = "caching is off"
+    data = _compile(entry)
+    if data is None:
+        return None, None
     if path is not None:
         _store(path, data)
-    return _parse(data, digest)
+    return _parse(data, entry.key), why
 
 
-def _compile(specs: Path, digest: str) -> bytes:
-    """The cache file's bytes for `specs`, compiled."""
+def _why(folder: Path, entry: Entry) -> str:
+    """Why a file is not in the cache: its spec or the code changed since it was cached, or
+    it never was."""
+    try:
+        names = [name for name in os.listdir(folder) if name.startswith(entry.stem + "-")]
+    except OSError:
+        names = []
+    spec = f"{entry.stem}-{_sha(entry.data)[:16]}-"
+    if any(name.startswith(spec) for name in names):
+        return "code changed"
+    return "spec changed" if names else "not cached"
+
+
+def _compile(entry: Entry) -> bytes | None:
+    """The cache file's bytes for one spec file compiled alone; None when it has errors."""
     from robofollow.benchmark.pipeline import compile_specs  # (seconds: only on a miss)
-    from robofollow.benchmark.rounds import episode_records, ordered_tasks
+    from robofollow.errors import SpecErrors
 
-    compiled = compile_specs(specs)
-    records = [record for task in ordered_tasks(compiled)
-               for record in episode_records(compiled, task)]
-    body = (compiled.spec.model_dump_json() + "\n"
-            + "".join(json_line(record, sort_keys=True) for record in records)).encode()
-    header = {"format": FORMAT, "key": digest, "sha256": hashlib.sha256(body).hexdigest(),
-              "ids": [record["episode"] for record in records]}
+    try:
+        compiled = compile_specs([entry.file])
+    except SpecErrors:
+        return None
+    ids, lines = _episodes(compiled)
+    head = {"scenes": {s: scene.model_dump(mode="json")
+                       for s, scene in compiled.spec.scenes.items()},
+            "training": {label: b.model_dump(mode="json")
+                         for label, b in compiled.training.items()}}
+    body = json.dumps(head).encode() + b"\n" + b"".join(line + b"\n" for line in lines)
+    header = {"format": FORMAT, "key": entry.key, "sha256": _sha(body), "ids": ids}
     return json.dumps(header).encode() + b"\n" + body
 
 
-def _parse(data: bytes, digest: str) -> Episodes:
-    """The Episodes of a cache file's bytes; ValueError when they do not verify."""
+def _episodes(compiled) -> tuple[tuple[str, ...], tuple[bytes, ...]]:
+    """A compile's episodes: their ids, and their records as the build writes them."""
+    from robofollow.benchmark.rounds import episode_records, ordered_tasks
+
+    records = [record for task in ordered_tasks(compiled)
+               for record in episode_records(compiled, task)]
+    return (tuple(record["episode"] for record in records),
+            tuple(json_line(record, sort_keys=True).rstrip("\n").encode() for record in records))
+
+
+def _parse(data: bytes, key: str) -> Part:
+    """The Part of a cache file's bytes; ValueError when they do not verify."""
     head, _, body = data.partition(b"\n")
     header = json.loads(head)
-    if (header["format"], header["key"]) != (FORMAT, digest):
+    if (header["format"], header["key"]) != (FORMAT, key):
         raise ValueError("a cache file of another format or key")
-    if header["sha256"] != hashlib.sha256(body).hexdigest():
+    if header["sha256"] != _sha(body):
         raise ValueError("a corrupt cache file")
-    spec, *lines, end = body.split(b"\n")
+    first, *lines, end = body.split(b"\n")
     if end or len(lines) != len(header["ids"]):
         raise ValueError("a cache file whose episodes do not match its ids")
-    return Episodes(Spec.model_validate_json(spec), tuple(header["ids"]), tuple(lines))
+    content = json.loads(first)
+    return Part({s: Scene.model_validate(scene) for s, scene in content["scenes"].items()},
+                {label: Behaviour.model_validate(b) for label, b in content["training"].items()},
+                tuple(header["ids"]), tuple(lines))
+
+
+def _whole(specs: Path) -> Episodes:
+    """The specs compiled together, uncached (see the module docstring): SpecErrors on bad
+    specs."""
+    from robofollow.benchmark.pipeline import compile_specs
+
+    compiled = compile_specs(specs)
+    return Episodes(compiled.spec, dict(compiled.training), *_episodes(compiled))
 
 
 def _store(path: Path, data: bytes) -> None:
@@ -188,7 +302,7 @@ def _store(path: Path, data: bytes) -> None:
     except OSError as error:
         partial.unlink(missing_ok=True)
         warnings.warn(f"cannot cache the compiled benchmark in {path.parent}: "
-                      f"{error.strerror or error}", RuntimeWarning, stacklevel=3)
+                      f"{error.strerror or error}", RuntimeWarning, stacklevel=4)
         return
     try:
         with os.scandir(path.parent) as entries:

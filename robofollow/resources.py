@@ -1,7 +1,9 @@
-"""Files shipped with the package: the grammars and the built-in benchmark specs."""
+"""Files shipped with the package (the grammars and the built-in benchmark specs), and where
+RoboFollow keeps what it caches."""
 
 from __future__ import annotations
 
+import os
 from importlib import resources
 from pathlib import Path
 
@@ -23,3 +25,14 @@ def builtin_specs() -> Path:
     """The folder of the benchmark's own .rf specs (installed with the package)."""
     packaged = Path(str(resources.files("robofollow").joinpath("specs")))
     return packaged if packaged.is_dir() else _SOURCE / "specs"
+
+
+def cache_root() -> Path | None:
+    """Where RoboFollow caches what it derives from its code and specs (compiled benchmarks,
+    parser tables): $ROBOFOLLOW_CACHE_DIR, else $XDG_CACHE_HOME/robofollow, else
+    ~/.cache/robofollow; None when ROBOFOLLOW_NO_CACHE=1 turns caching off."""
+    if os.environ.get("ROBOFOLLOW_NO_CACHE", "") not in ("", "0"):
+        return None
+    root = os.environ.get("ROBOFOLLOW_CACHE_DIR") or Path(
+        os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "robofollow"
+    return Path(root)

@@ -6,8 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from robofollow.benchmark.episode import EpisodeSetup
-from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.episode import Benchmark, EpisodeSetup
 from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
 from robofollow.errors import RoboFollowError
 from robofollow.oracle.results import EpisodeScore
@@ -19,7 +18,7 @@ class RecordingMismatchError(RoboFollowError):
     """A trajectory that was not recorded in the episode's scene layout."""
 
 
-def score_recording(compiled: Compiled, episode: EpisodeSetup, trajectory: Trajectory,
+def score_recording(compiled: Benchmark, episode: EpisodeSetup, trajectory: Trajectory,
                     profile: ScoringProfile = DEFAULT_PROFILE) -> EpisodeScore:
     scene = compiled.spec.scenes[episode.scene]
     layout = trajectory.meta.get("layout")

@@ -43,6 +43,15 @@ def scene1(tmp_path_factory):
     return folder
 
 
+@pytest.fixture(scope="module")
+def two_scenes(tmp_path_factory):
+    """A specs folder of two built-in scenes, one file each."""
+    folder = tmp_path_factory.mktemp("two")
+    for name in ("scene1.rf", "scene3.rf"):
+        shutil.copy(builtin_specs() / name, folder)
+    return folder
+
+
 def _avoidable(caught: list[warnings.WarningMessage]) -> list[str]:
     return [str(w.message) for w in caught
             if not any(text in str(w.message) for text in UNAVOIDABLE)]
@@ -140,36 +149,71 @@ def test_a_warm_cache_starts_an_env_in_under_a_second(cache):
     assert sorted(cache.iterdir()) == cached  # read, not compiled again
 
 
-def test_a_cached_benchmark_is_read_not_compiled(scene1, monkeypatch):
+def _cache_file(cache: Path, spec: Path) -> Path:
+    """Where the cache keeps a spec file's compiled part."""
+    spec = Path(os.path.realpath(spec))
+    return cache / compiled_cache.Entry(spec, spec.read_bytes()).name
+
+
+def test_a_cached_benchmark_is_read_not_compiled(scene1, monkeypatch, capfd):
     compiled = compiled_cache.load(scene1)
-    compiled_cache._load.cache_clear()  # (the per-process memo: read the file this time)
+    capfd.readouterr()
+    compiled_cache._assemble.cache_clear()  # (the per-process memo: read the file this time)
     monkeypatch.setattr(compiled_cache, "_compile", pytest.fail)
     read = compiled_cache.load(scene1)
     assert read.ids == compiled.ids and read.spec == compiled.spec
     assert read.record(read.ids[-1]) == compiled.record(compiled.ids[-1])
+    assert read.candidates("scene1") == compiled.candidates("scene1")
+    assert capfd.readouterr().err == ""  # a full hit says nothing
 
 
-def test_a_changed_spec_file_compiles_again(scene1, tmp_path, cache):
-    specs = shutil.copytree(scene1, tmp_path / "specs")
+def test_the_cache_holds_what_one_compile_of_the_folder_gives(two_scenes):
+    from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.benchmark.rounds import all_episodes, episode_records, ordered_tasks
+    from robofollow.files import json_line
+
+    cached = compiled_cache.load(two_scenes)
+    compiled = compile_specs(two_scenes)
+    assert cached.spec == compiled.spec and cached.training == dict(compiled.training)
+    assert cached.ids == tuple(episode.id for episode in all_episodes(compiled))
+    assert cached.lines == tuple(json_line(record, sort_keys=True).rstrip("\n").encode()
+                                 for task in ordered_tasks(compiled)
+                                 for record in episode_records(compiled, task))
+
+
+def test_an_edited_spec_compiles_only_its_own_scenes(two_scenes, tmp_path, cache, capfd):
+    specs = shutil.copytree(two_scenes, tmp_path / "specs")
     before = compiled_cache.load(specs)
-    with open(specs / "scene1.rf", "a", encoding="utf-8") as spec:
+    assert "compiled scene1 (not cached), scene3 (not cached)" in capfd.readouterr().err
+    with open(specs / "scene3.rf", "a", encoding="utf-8") as spec:
         spec.write("\n# changed\n")
-    key = compiled_cache.key(specs)
-    assert not (cache / f"{key}.jsonl").exists()
+    assert not _cache_file(cache, specs / "scene3.rf").exists()
     after = compiled_cache.load(specs)
-    assert (cache / f"{key}.jsonl").is_file()
-    assert after.ids == before.ids
+    assert capfd.readouterr().err == "compiled scene3 (spec changed), 1 scene from cache\n"
+    assert _cache_file(cache, specs / "scene3.rf").is_file()
+    assert after.ids == before.ids and after.lines == before.lines
+    assert after.spec.digest != before.spec.digest
+
+
+def test_scenes_defined_twice_are_compiled_together_and_refused(scene1, tmp_path):
+    from robofollow.errors import SpecErrors
+
+    specs = shutil.copytree(scene1, tmp_path / "twice")
+    shutil.copy(specs / "scene1.rf", specs / "again.rf")
+    with pytest.raises(SpecErrors) as raised:
+        compiled_cache.load(specs)
+    assert [e.code for e in raised.value.errors] == ["duplicate-scene"]
 
 
 @pytest.mark.parametrize("damage", ["truncated", "flipped", "garbage", "empty"])
 def test_a_corrupt_cache_file_is_compiled_again(scene1, cache, damage):
     expected = compiled_cache.load(scene1)
-    path = cache / f"{compiled_cache.key(scene1)}.jsonl"
+    path = _cache_file(cache, scene1 / "scene1.rf")
     data = path.read_bytes()
     damaged = {"truncated": data[:len(data) // 2], "garbage": b"\xff\x00not json\n",
                "flipped": data[:-100] + bytes([data[-100] ^ 1]) + data[-99:], "empty": b""}
     path.write_bytes(damaged[damage])
-    compiled_cache._load.cache_clear()
+    compiled_cache._assemble.cache_clear()
     loaded = compiled_cache.load(scene1)
     assert loaded.ids == expected.ids and loaded.spec == expected.spec
     assert path.read_bytes() == data  # replaced by a good one

@@ -5,7 +5,8 @@
   (compiler/task_rules.py: leakage, level, repertoire, route, feasibility, duplicates,
   ambiguity at the nominal positions and the jitter extremes, truthful wording), each scene
   against its own spec, so a fresh build audits clean by construction and a hand-edited or
-  foreign one shows what is wrong;
+  foreign one shows what is wrong (a task the generator itself examined and kept is not
+  grounded again: see task_findings);
 - every training instruction grounds to its behaviour at the jitter extremes too.
 """
 
@@ -17,11 +18,12 @@ from robofollow.audit.entropy import (
     same_behaviours,
     scene_groups,
 )
+from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import Grounder, instability
 from robofollow.compiler.spec import Spec
 from robofollow.compiler.split_report import rule_report
-from robofollow.compiler.splits import Splits
+from robofollow.compiler.splits import Splits, TestTask
 from robofollow.compiler.task_rules import TaskRules, arms_of
 from robofollow.compiler.world import jitter_worlds
 
@@ -34,19 +36,29 @@ FINDING_LISTS = {"leakage": ("leakage",), "level_inconsistencies": ("level",),
 FINDING_KEYS = tuple(FINDING_LISTS)
 
 
-def task_findings(spec: Spec, training: dict[str, Behaviour], splits: Splits) -> dict:
+def task_findings(spec: Spec, training: dict[str, Behaviour], splits: Splits,
+                  examined: frozenset[TestTask] = frozenset()) -> dict:
     """{list name: [{task, finding}]}: every compiled task examined in order by its scene's
-    rules (FINDING_LISTS)."""
+    rules (FINDING_LISTS). A task in `examined` (the generator's, `generate_examined` of the
+    same spec and training) passed the rules that ground it when the generator kept it, and
+    they read nothing but the task, its scene and the training behaviours, so only the rules
+    that read the other tasks (duplicates) and the training (leakage, level) run again: the
+    audit stays complete for tasks edited, added or reordered after generating."""
     rules = {scene: TaskRules(spec.scenes[scene], training) for scene in spec.scenes}
     kinds = {kind: name for name, members in FINDING_LISTS.items() for kind in members}
     found: dict[str, list[dict]] = {name: [] for name in FINDING_LISTS}
     for task in splits.tasks:
         scene_rules = rules[task.scene]
-        examined = scene_rules.examine(task.level, task.layout, task.instruction, task.form,
-                                       arms_of(task.behaviour))
-        for kind, message in examined.findings:
+        if task in examined:
+            findings, behaviour = scene_rules.placement(
+                task.level, task.layout, task.instruction, lf.to_json(task.form)), task.behaviour
+        else:
+            examination = scene_rules.examine(task.level, task.layout, task.instruction,
+                                              task.form, arms_of(task.behaviour))
+            findings, behaviour = examination.findings, examination.behaviour
+        for kind, message in findings:
             found[kinds[kind]].append({"task": task.id, "finding": message})
-        if examined.behaviour is not None and examined.behaviour != task.behaviour:
+        if behaviour is not None and behaviour != task.behaviour:
             found["ambiguities"].append({"task": task.id, "finding": (
                 "its words ground to another behaviour than the compiled one")})
         scene_rules.keep(task.id, task.level, task.layout, task.form)
@@ -70,12 +82,13 @@ def training_ambiguities(spec: Spec, training: dict[str, Behaviour]) -> list[dic
     return findings
 
 
-def audit(spec: Spec, training: dict[str, Behaviour], splits: Splits) -> dict:
-    """The audit as one JSON-ready object."""
+def audit(spec: Spec, training: dict[str, Behaviour], splits: Splits,
+          examined: frozenset[TestTask] = frozenset()) -> dict:
+    """The audit as one JSON-ready object (`examined`: see task_findings)."""
     groups = scene_groups(spec)
     for group in groups:
         group["behaviours"] = same_behaviours(spec, training, group["tasks"])
-    found = task_findings(spec, training, splits)
+    found = task_findings(spec, training, splits, examined)
     found["ambiguities"] = training_ambiguities(spec, training) + found["ambiguities"]
     counts = {scene: {level: len(splits.of(scene, level)) for level in ("L0", "L1", "L2", "L3")}
               for scene in spec.scenes}

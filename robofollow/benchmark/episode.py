@@ -1,19 +1,20 @@
 """What an episode is: a compiled test task's round, fully determined by (spec digest, task,
 level, layout, round, seed), with a hash over all of that. `EpisodeSetup` is the part a
 simulation and the scorer read (where the episode starts and what it asks); an `Episode` is a
-compiled test episode, as the build writes it to `episodes/*.jsonl`. This module stays light:
-an env reads episodes without loading the compiler's passes."""
+compiled test episode, as the build writes it to `episodes/*.jsonl`; a `Benchmark` is what
+running and scoring one read of the benchmark it belongs to. This module stays light: an env
+reads episodes without loading the compiler's passes."""
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Literal, Protocol
 
 from pydantic import ConfigDict, Field
 
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.model import Model
-from robofollow.compiler.spec import Level
+from robofollow.compiler.spec import Level, Spec
 
 
 class EpisodeSetup(Model):
@@ -49,3 +50,14 @@ class Episode(EpisodeSetup):
     motion: Literal["moved", "as-trained"] | None = None
     hash: str
     split: str
+
+
+class Benchmark(Protocol):
+    """What running and scoring an episode read of a compiled benchmark: a
+    `pipeline.Compiled`, or the `compiled_cache.Episodes` read from the cache."""
+
+    @property
+    def spec(self) -> Spec: ...
+
+    def candidates(self, scene: str) -> dict[str, Behaviour]:
+        """The scene's training behaviours by label ('did instead' candidates)."""

@@ -17,7 +17,7 @@ from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.spec import Spec
 from robofollow.compiler.spec_files import spec_files
 from robofollow.compiler.spec_loader import load_partial
-from robofollow.compiler.splits import Splits, generate
+from robofollow.compiler.splits import Splits, generate_examined
 from robofollow.compiler.training import training_behaviours
 from robofollow.errors import SpecErrors
 
@@ -50,6 +50,11 @@ class Compiled:
         return json.loads(self.audit_json)
 
     @cached_property
+    def scene_digests(self) -> Mapping[str, str]:
+        """Each scene's `Scene.digest`, computed once (every episode record hashes it)."""
+        return MappingProxyType({scene.id: scene.digest for scene in self.spec.scenes.values()})
+
+    @cached_property
     def split_digests(self) -> Mapping[str, str]:
         """Each scene's split digest: sha256 over the scene's digest and its test tasks in
         order, so it changes when, and only when, that scene's tests or what they start from
@@ -57,7 +62,7 @@ class Compiled:
         digests = {}
         for scene in self.spec.scenes.values():
             tasks = [t.model_dump_json() for t in self.splits.tasks if t.scene == scene.id]
-            content = "\n".join([scene.digest, *tasks])
+            content = "\n".join([self.scene_digests[scene.id], *tasks])
             digests[scene.id] = hashlib.sha256(content.encode()).hexdigest()
         return MappingProxyType(digests)
 
@@ -103,8 +108,8 @@ def _compile(specs: Path | list[Path]) -> Compiled:
     errors = loaded.errors + training_errors + test_errors
     if errors:
         raise SpecErrors(errors)
-    splits = generate(spec, training, listed)
-    return Compiled.of(spec, splits, training, audit(spec, training, splits))
+    splits, examined = generate_examined(spec, training, listed)
+    return Compiled.of(spec, splits, training, audit(spec, training, splits, examined))
 
 
 def clean(compiled: Compiled) -> bool:

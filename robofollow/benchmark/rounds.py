@@ -31,7 +31,7 @@ def _rounds(compiled: Compiled, task: TestTask) -> Iterator[tuple[Episode, dict]
         varying = {"episode": f"{task.id}#r{round_index}", "round": round_index,
                    "seed": episode_seed(task.id, round_index, rule.seed)}
         record = {**common, **varying}
-        content = scene.digest + json_line(record, sort_keys=True)
+        content = compiled.scene_digests[task.scene] + json_line(record, sort_keys=True)
         record["hash"] = hashlib.sha256(content.encode()).hexdigest()[:16]
         record["split"] = split
         yield first.model_copy(update={"id": varying["episode"], "round": round_index,

@@ -8,7 +8,6 @@ import sys
 
 from robofollow.compiler import lf
 from robofollow.compiler.notation import notation
-from robofollow.compiler.parser import parse
 from robofollow.compiler.realize import STYLES, realize
 from robofollow.errors import InstructionError
 from robofollow.files import json_line
@@ -41,6 +40,8 @@ def add_parse(commands) -> None:
 
 
 def _parse_one(text: str, args) -> int:
+    from robofollow.compiler.parser import parse  # (lark: only for this command)
+
     try:
         instruction = parse(text)
     except InstructionError as error:
@@ -56,6 +57,8 @@ def _parse_one(text: str, args) -> int:
 
 def _parse_stream(stream, out) -> int:
     """One output record per input line, blank lines included (an 'empty' error)."""
+    from robofollow.compiler.parser import parse
+
     status = 0
     for line in stream:
         text = line.removesuffix("\n").removesuffix("\r")

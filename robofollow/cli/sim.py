@@ -29,8 +29,7 @@ def add_score(commands) -> None:
 
 
 def cmd_score(args) -> int:
-    from robofollow.benchmark.pipeline import compile_specs
-    from robofollow.benchmark.rounds import find_episode
+    from robofollow.compiled_cache import load
     from robofollow.scoring import score_recording
     from robofollow.trajectory import Trajectory
 
@@ -39,9 +38,9 @@ def cmd_score(args) -> int:
     if not episode_id:
         raise RoboFollowError(f"{args.trajectory} does not say which episode it records; "
                               "pass --episode ID")
-    compiled = compile_specs(specs_of(args))
-    record = find_episode(compiled, episode_id)
-    result = score_recording(compiled, record, trajectory)
+    benchmark = load(specs_of(args))
+    record = benchmark.record(episode_id)
+    result = score_recording(benchmark, record, trajectory)
     if args.json:
         print(result.model_dump_json(indent=1))
     else:
@@ -75,21 +74,21 @@ def add_expert(commands) -> None:
 
 
 def cmd_expert(args) -> int:
-    from robofollow.benchmark.pipeline import compile_specs
-    from robofollow.benchmark.rounds import find_episode
+    from robofollow.compiled_cache import load
     from robofollow.sim.cameras import side_by_side
     from robofollow.sim.rollout import run_expert
     from robofollow.sim.simulation import CONTROL_HZ
-    from robofollow.sim.video import write_video
 
-    compiled = compile_specs(specs_of(args))
-    episode = find_episode(compiled, args.episode)
+    benchmark = load(specs_of(args))
+    episode = benchmark.record(args.episode)
     width, height = args.image_size
     frames: list = []
-    result = run_expert(compiled, episode,
+    result = run_expert(benchmark, episode,
                         (lambda images: frames.append(side_by_side(images))) if args.video
                         else None, width, height)
     if args.video:
+        from robofollow.sim.video import write_video  # (PyAV: only for a video)
+
         write_video(args.video, frames, CONTROL_HZ)
     if args.trajectory:
         result.trajectory.save(args.trajectory)
@@ -127,13 +126,13 @@ def add_render(commands) -> None:
 
 
 def cmd_render(args) -> int:
-    from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.compiled_cache import load
     from robofollow.sim.picture import layout_picture
 
-    compiled = compile_specs(specs_of(args))
-    layout = scene_layout(compiled, args.scene, args.layout)
+    benchmark = load(specs_of(args))
+    layout = scene_layout(benchmark, args.scene, args.layout)
     width, height = args.image_size
-    layout_picture(compiled.spec.scenes[args.scene], layout, args.seed, width,
+    layout_picture(benchmark.spec.scenes[args.scene], layout, args.seed, width,
                    height).save(args.output)
     print(f"{args.scene}/{layout} drawn to {args.output}")
     return 0

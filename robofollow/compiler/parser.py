@@ -14,6 +14,7 @@ from lark.lexer import Lexer
 from lark.parsers.lalr_analysis import Shift
 
 from robofollow.compiler import lf
+from robofollow.compiler.lark_tables import cached_lark
 from robofollow.compiler.lexicon import VOCABULARY, WordToken, tokenize, words_of
 from robofollow.compiler.semantics import Semantics
 from robofollow.compiler.syntax import ToSyntax
@@ -44,8 +45,9 @@ class _WordLexer(Lexer):
 
 @cache
 def _lark() -> Lark:
-    return Lark(grammar_text("instruction.lark"), parser="lalr", lexer=_WordLexer,
-                transformer=ToSyntax(), strict=True)
+    """The parser (its tables from the cache folder: lark_tables.py)."""
+    return cached_lark("instruction", grammar_text("instruction.lark"), lexer=_WordLexer,
+                       transformer=ToSyntax(), strict=True)
 
 
 @cache

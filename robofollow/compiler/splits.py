@@ -108,6 +108,7 @@ class _Generator:
         self.tasks: list[TestTask] = []
         self.rejected: list[Rejection] = []
         self.describers: dict[str, Describer] = {}
+        self.spoken: dict[tuple[str, str], tuple[str, str | None]] = {}
 
     def reject(self, level: Level, layout: str, instruction: str, origin: str,
                reason: str) -> None:
@@ -180,36 +181,45 @@ class _Generator:
             data = lf.to_json(novel)
             digest = hashlib.sha256(data.encode()).hexdigest()
             task_id = f"{self.scene.id}/{level}/{origin}@{layout}/{wording}-{digest[:8]}"
-            candidates.append((_digest_of(task_id), task_id, wording, novel, digest))
+            candidates.append((_digest_of(task_id), task_id, wording, novel, data, digest))
         kept, limit = 0, self.limit(level)
-        for _, task_id, wording, novel, digest in sorted(candidates, key=lambda c: c[:2]):
+        for _, task_id, wording, novel, data, digest in sorted(candidates, key=lambda c: c[:2]):
             if limit is not None and kept >= limit:
                 return
-            text, problem = self.speak(novel, int(digest[:8], 16), layout)
+            text, problem = self.speak(novel, data, int(digest[:8], 16), layout)
             if problem:
                 self.reject(level, layout, text, origin, problem)
             else:
                 kept += self.consider(level, layout, text, novel, origin, wording, task_id)
 
-    def speak(self, form: lf.Instruction, pick: int, layout: str) -> tuple[str, str | None]:
+    def speak(self, form: lf.Instruction, form_json: str, pick: int,
+              layout: str) -> tuple[str, str | None]:
         """English for a form in the first style (from `pick` on) that uses only the scene's
         training words and reads as it is scored; else the first style's text and why not."""
         styles = sorted(STYLES)
         grounder = self.rules.grounders(layout)[0]
         first = None
         for offset in range(len(styles)):
-            text = realize(form, styles[(pick + offset) % len(styles)])
-            unknown = concepts(text) - self.vocabulary
-            if unknown:
-                words = ", ".join(sorted(value for _, value in unknown))
-                problem = f"words: no training instruction of {self.scene.id} uses {words}"
-            else:
+            text, problem = self.words(form, form_json, styles[(pick + offset) % len(styles)])
+            if problem is None:
                 problems = wording_problems(text, form, grounder)
                 problem = f"wording: {problems[0]}" if problems else None
             if problem is None:
                 return text, None
             first = first or (text, problem)
         return first
+
+    def words(self, form: lf.Instruction, form_json: str, style: str) -> tuple[str, str | None]:
+        """The form in a style, and why not if it uses words no training instruction of the
+        scene uses (memoised: the same forms come up on other layouts and from other tasks)."""
+        key = form_json, style
+        if key not in self.spoken:
+            text = realize(form, style)
+            unknown = concepts(text) - self.vocabulary
+            words = ", ".join(sorted(value for _, value in unknown))
+            self.spoken[key] = text, (f"words: no training instruction of {self.scene.id} "
+                                      f"uses {words}" if unknown else None)
+        return self.spoken[key]
 
     def cap(self, level: Level) -> None:
         """Keep at most the rule's `max` tasks of a level, listed tests first, then generated
@@ -266,6 +276,15 @@ def generate(spec: Spec, training: dict[str, Behaviour], listed: tuple[TestTask,
              levels: tuple[Level, ...] = ("L0", "L1", "L2", "L3")) -> Splits:
     """Test tasks for the given levels of every scene (the spec's `listed` tests included),
     with every rejected candidate. Each scene is generated from its own spec alone."""
+    return generate_examined(spec, training, listed, levels)[0]
+
+
+def generate_examined(spec: Spec, training: dict[str, Behaviour],
+                      listed: tuple[TestTask, ...] = (),
+                      levels: tuple[Level, ...] = ("L0", "L1", "L2", "L3")
+                      ) -> tuple[Splits, frozenset[TestTask]]:
+    """`generate`, and the test tasks it examined by every rule of task_rules.py and kept
+    (all but the listed ones): their verdicts, for the audit of these splits."""
     tasks: list[TestTask] = []
     rejected: list[Rejection] = []
     for scene in spec.scenes.values():
@@ -273,4 +292,5 @@ def generate(spec: Spec, training: dict[str, Behaviour], listed: tuple[TestTask,
         generator.run(levels)
         tasks += generator.tasks
         rejected += generator.rejected
-    return Splits(tasks=tuple(tasks), rejected=tuple(rejected))
+    examined = frozenset(task for task in tasks if task.wording != "listed")
+    return Splits(tasks=tuple(tasks), rejected=tuple(rejected)), examined

@@ -176,14 +176,7 @@ class TaskRules:
         `keep` it once it is kept. The cheap rules come first, the jitter extremes last."""
         result = Examination()
         found = result.findings
-        form_json = lf.to_json(form)
-        repeat = self.seen.repeat(level, layout, form_json)
-        if repeat:
-            found.append(("duplicate", repeat))
-        found += [("leakage", m) for m in self.facts.leakage(level, layout, form_json,
-                                                            instruction)]
-        found += [("level", m) for m in self.facts.level_problems(level, layout, form_json,
-                                                                 instruction)]
+        found += self.placement(level, layout, instruction, lf.to_json(form))
         grounders = self.grounders(layout)
         world = grounders[0].world
         if found and not every:
@@ -200,6 +193,20 @@ class TaskRules:
                 break
             found += [(kind, problem) for problem in rule(self, task)]
         return result
+
+    def placement(self, level: str, layout: str, instruction: str,
+                  form_json: str) -> list[tuple[str, str]]:
+        """The findings of the rules that ground nothing (duplicate, leakage, level): where
+        the task stands among the training tasks and the tasks kept so far."""
+        found = []
+        repeat = self.seen.repeat(level, layout, form_json)
+        if repeat:
+            found.append(("duplicate", repeat))
+        found += [("leakage", m) for m in self.facts.leakage(level, layout, form_json,
+                                                            instruction)]
+        found += [("level", m) for m in self.facts.level_problems(level, layout, form_json,
+                                                                 instruction)]
+        return found
 
     def _routes(self, task: _Grounded) -> list[str]:
         return [p for step in task.behaviour.steps for p in degenerate_routes(step, task.world)]

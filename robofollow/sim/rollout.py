@@ -12,8 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robofollow.benchmark.episode import EpisodeSetup
-from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.episode import Benchmark, EpisodeSetup
 from robofollow.compiler.plans import plan
 from robofollow.oracle.results import EpisodeScore
 from robofollow.scoring import score_recording
@@ -33,7 +32,7 @@ class Rollout:
     pose, and the actions executed so far (`done` once `budget` control steps are spent; None:
     no budget). `on_frame(stage)` is called after every recorded frame (e.g. to render it)."""
 
-    def __init__(self, compiled: Compiled, stage: Stage, episode: EpisodeSetup, render: bool,
+    def __init__(self, compiled: Benchmark, stage: Stage, episode: EpisodeSetup, render: bool,
                  budget: int | None = None, on_frame: OnFrame | None = None):
         self.compiled, self.stage, self.episode = compiled, stage, episode
         self.budget, self.on_frame = budget, on_frame
@@ -93,7 +92,7 @@ class ExpertRun:
 class ExpertRunner(Stage):
     """Runs the expert on episodes, reusing the current layout's simulation and renderer."""
 
-    def run(self, compiled: Compiled, episode: EpisodeSetup,
+    def run(self, compiled: Benchmark, episode: EpisodeSetup,
             on_images: OnImages | None = None) -> ExpertRun:
         """Reset to the episode's layout and seed, execute the expert's plan (handing each
         frame's camera images to `on_images`, if given), and score the recording."""
@@ -107,7 +106,7 @@ class ExpertRunner(Stage):
                          trajectory)
 
 
-def run_expert(compiled: Compiled, episode: EpisodeSetup, on_images: OnImages | None = None,
+def run_expert(compiled: Benchmark, episode: EpisodeSetup, on_images: OnImages | None = None,
                width: int = IMAGE_WIDTH, height: int = IMAGE_HEIGHT) -> ExpertRun:
     """One expert episode in a fresh simulation (see ExpertRunner.run)."""
     with ExpertRunner(width, height) as runner:
