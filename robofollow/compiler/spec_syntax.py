@@ -13,6 +13,7 @@ from functools import cache
 
 from lark import Lark, Token, Transformer, v_args
 
+from robofollow.compiler.lark_tables import cached_lark
 from robofollow.resources import grammar_text
 
 # ---------------------------------------------------------------- values
@@ -275,4 +276,4 @@ class _ToNodes(Transformer):
 @cache
 def spec_parser() -> Lark:
     """The spec grammar's LALR parser, building the records above as it reduces."""
-    return Lark(grammar_text("spec.lark"), parser="lalr", strict=True, transformer=_ToNodes())
+    return cached_lark("spec", grammar_text("spec.lark"), strict=True, transformer=_ToNodes())
