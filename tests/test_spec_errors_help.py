@@ -197,7 +197,8 @@ def test_a_split_rule_may_allow_a_repeat(tmp_path, capsys):
                 "layout swapped from base { }").replace("seed=42", "seed=42 repeats=allowed")
     status, out, err = compile_spec(tmp_path, text, capsys)
     assert status == 0, err
-    assert "demo split L1: layout swapped yields no task" in out
+    assert "yields no task" not in out
+    assert "demo/L1/" in (tmp_path / "out" / "tasks" / "demo_L1.jsonl").read_text()
 
 
 @pytest.mark.parametrize("old,new,code,message", [

@@ -9,7 +9,8 @@ duplicate     it repeats an earlier task: the same level and meaning on a layout
 leakage       its (layout, form) pair is a training pair; an L2/L3 form is a training form; the
               words name a spec identifier
 level         it is not what its level claims (L0 training pairs, L1 training instructions on
-              layouts that look new, L2 training layouts, L3 layouts that look new)
+              layouts that look new, L2 training layouts, L3 layouts that look new; a layout
+              the L1 or L3 rule declares a repeat, `repeats=allowed`, may look like training)
 no-referent   a description names nothing on the layout
 ambiguous     a description fits several bodies, nominally or at a jitter extreme
 route         a body the route names is not on the way (routes.py)
@@ -77,13 +78,19 @@ class TrainingFacts:
             self._look_alike[layout] = look_alike(self.scene, layout, self.scene.training_layouts)
         return self._look_alike[layout]
 
+    def _repeat_allowed(self, level: str, layout: str) -> bool:
+        """Whether the level's split rule names `layout` as a distractor-free repeat of a
+        training layout (`repeats=allowed`)."""
+        rule = self.scene.splits.get(level)
+        return rule is not None and rule.repeats == "allowed" and layout in rule.layouts
+
     def level_problems(self, level: str, layout: str, form: str, instruction: str) -> list[str]:
         same = self.training_look_alike(layout)
         found = []
         if level == "L0" and (layout, form) not in self.pairs:
             found.append("an L0 task is a training pair, but no training task asks this on "
                          f"{layout}")
-        if level in ("L1", "L3") and same is not None:
+        if level in ("L1", "L3") and same is not None and not self._repeat_allowed(level, layout):
             found.append(f"an {level} task is on a layout that looks different from every "
                          f"training layout, but {layout} looks the same as {same}")
         if level == "L1" and instruction not in self.instructions:
