@@ -18,7 +18,7 @@ from lark import Lark
 
 from robofollow.audit.task_list import FINDING_KINDS
 from robofollow.cli import parser as cli_parser
-from robofollow.compiler import lf, spec, spec_loader, workspace
+from robofollow.compiler import lf, spec, spec_loader, spec_splits, workspace
 from robofollow.compiler.spec_loader import load_partial
 from robofollow.compiler.task_rules import _GROUNDED_RULES
 from robofollow.compiler.wordings import GENERATORS
@@ -179,8 +179,8 @@ def test_every_relation_arm_and_branch_of_expect():
 
 
 def test_every_wording_generator():
-    assert set(spec_loader.WORDINGS) == set(GENERATORS)
-    assert _missing("Wording generators", spec_loader.WORDINGS) == []
+    assert set(spec_splits.WORDINGS) == set(GENERATORS)
+    assert _missing("Wording generators", spec_splits.WORDINGS) == []
     table = "\n".join(line for line in _section("Wording generators").splitlines()
                       if line.startswith("| `"))
     assert all(f"| `{name}` |" in table for name in GENERATORS)
