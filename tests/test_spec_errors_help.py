@@ -146,12 +146,12 @@ def test_a_jitter_that_carries_a_body_off_the_table_is_reported_at_the_jitter(tm
 
 
 @pytest.mark.parametrize("old,new,message", [
-    ("swap red_cube blue_cube", f"{MARK}recolor red_cube orange",
-     ("unknown layout operation 'recolor' (layout operations: at, on, in, swap, move, remove, "
-     "put)")),
+    ("swap red_cube blue_cube", f"{MARK}paint red_cube orange",
+     ("unknown layout operation 'paint' (layout operations: at, on, in, swap, move, remove, "
+     "put, recolor)")),
     ("swap red_cube blue_cube", f"{MARK}swp red_cube blue_cube",
      ("unknown layout operation 'swp'; did you mean 'swap'? (layout operations: at, on, in, "
-     "swap, move, remove, put)")),
+     "swap, move, remove, put, recolor)")),
     ("    layout base", f"    {MARK}objet green_cube cube\n    layout base",
      (f"unknown statement 'objet'; did you mean 'object'? (a scene holds: {STATEMENTS}; an "
      "attribute is written name=value)")),

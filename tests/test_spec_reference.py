@@ -33,7 +33,7 @@ SECTIONS = {
     "value": "Lexical rules", "coordinates": "Lexical rules", "position": "`layout`",
     "scene": "`scene`", "setting": "`set`", "point": "`point`", "body": "`object`",
     "body_kind": "`object`", "jitter": "`jitter`", "layout": "`layout`",
-    "layout_op": "`layout`", "task": "`task`", "test": "`test`", "expect": "`expect`",
+    "layout_op": "`layout`", "rgb": "`layout`", "task": "`task`", "test": "`test`", "expect": "`expect`",
     "branch": "`expect`", "step": "`expect`", "relation": "`expect`", "waypoint": "`expect`",
     "yaw": "`expect`", "split": "`split`",
 }

@@ -1,6 +1,7 @@
 """Layouts -> poses: a layout is written as placements, or as operations on another layout
 (`layout b from a { swap x y }`); every body is posed on the table, on another body or in a
-bowl. Checked here: cycles of derivation and of support, stacks at most MAX_STACK high, and
+bowl; a `recolor` gives a body another colour (recolours.py), kept by the layouts derived
+from it. Checked here: cycles of derivation and of support, stacks at most MAX_STACK high, and
 (footprints.py) footprints that stay on the table and clear of each other with the jitter at
 its extremes. A problem of poses is reported at the statement that causes it, once: the
 layouts derived from the first that has it, and keep it, are named there. Iterative throughout: neither a long chain of derived layouts nor a stack recurses."""
@@ -12,7 +13,8 @@ from dataclasses import dataclass, field
 from lark import Token
 
 from robofollow.compiler.footprints import Footprints, Spot
-from robofollow.compiler.spec import MAX_STACK, Body, Layout, Placed
+from robofollow.compiler.recolours import recolour
+from robofollow.compiler.spec import MAX_STACK, Body, Colour, Layout, Placed
 from robofollow.compiler.spec_checks import Checks
 from robofollow.compiler.spec_syntax import Coordinates, LayoutNode, LayoutOp
 
@@ -32,8 +34,9 @@ class _Problem:
 
 
 class LayoutResolver:
-    """A scene's layouts -> absolute poses; problems go to `checks`. Bodies in `broken` (a
-    bad attribute, reported there) are left out of the footprint checks."""
+    """A scene's layouts -> absolute poses and colours; problems go to `checks`. Bodies in
+    `footprints.broken` (a bad attribute, reported there) are left out of the footprint and
+    look-alike checks."""
 
     def __init__(self, checks: Checks, bodies: dict[str, Body],
                  points: dict[str, tuple[float, float]], bad_points: set[str], table: float,
@@ -46,6 +49,7 @@ class LayoutResolver:
         self.footprints = footprints
         self.raw: dict[str, LayoutNode] = {}
         self.done: dict[str, dict[str, Spot] | None] = {}
+        self.colours: dict[str, dict[str, Colour]] = {}  # by layout: its `recolor`s, inherited
         self.problems: dict[tuple, _Problem] = {}  # of poses, by key, in the order found
         self.unposed: set[str] = set()  # layouts whose bodies could not be posed
 
@@ -72,7 +76,8 @@ class LayoutResolver:
                 if placed is None:
                     self.unposed.add(layout)
                 else:
-                    posed[layout] = Layout(name=layout, base=base, placed=placed)
+                    posed[layout] = Layout(name=layout, base=base, placed=placed,
+                                           colours=self.colours[layout])
         self.report_problems()
         return {name: posed[name] for name in self.raw if name in posed}
 
@@ -120,29 +125,36 @@ class LayoutResolver:
         for layout in reversed(chain):
             base = self.base(layout)
             arrangement: dict[str, Spot] = {}
+            colours: dict[str, Colour] = {}
             if base is not None:
                 inherited = self.done[base]
                 if inherited is None:
                     return self.fail(chain)
-                arrangement = dict(inherited)
+                arrangement, colours = dict(inherited), dict(self.colours[base])
             # every op, every error
-            applied = [self.apply(op, arrangement) for op in self.raw[layout].ops]
+            applied = [self.apply(op, arrangement, colours) for op in self.raw[layout].ops]
             self.done[layout] = arrangement if all(applied) else None
+            self.colours[layout] = colours
         return self.done[name]
 
     def fail(self, chain: list[str]) -> None:
         for layout in chain:
             self.done.setdefault(layout, None)
 
-    def apply(self, op: LayoutOp, arrangement: dict[str, Spot]) -> bool:
-        """Apply one operation; False (reported, or already reported) when it fails."""
+    def apply(self, op: LayoutOp, arrangement: dict[str, Spot],
+              colours: dict[str, Colour]) -> bool:
+        """Apply one operation to the arrangement (a recolour: to `colours`); False
+        (reported, or already reported) when it fails."""
         kind, other = op.kind, op.other
         if not (self.known(op.body) and (other is None or self.known(other))):
             return False
         first = str(op.body)
-        if kind in ("swap", "move", "remove", "put_on", "put_in") and first not in arrangement:
+        if kind in ("swap", "move", "remove", "put_on", "put_in", "recolor") \
+                and first not in arrangement:
             self.checks.error("not-in-layout", f"{first} is not in this layout", op.body)
             return False
+        if kind == "recolor":
+            return recolour(self.checks, op, self.bodies, self.footprints.broken, colours)
         if kind in ("at", "move"):
             position = self.position(op.position, first)
             if position is None:

@@ -9,6 +9,7 @@ changes nothing a camera sees.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 
 import networkx as nx
 
@@ -30,12 +31,18 @@ def looks_alike(a: Body | None, b: Body | None) -> bool:
             and all(abs(x - y) <= COLOUR_TOLERANCE for x, y in zip(a.rgb, b.rgb, strict=True)))
 
 
+def misnamed_twin(body: Body, others: Iterable[Body]) -> Body | None:
+    """The first of `others` that looks the same as `body` but has another colour word."""
+    return next((other for other in others
+                 if looks_alike(other, body) and other.color != body.color), None)
+
+
 def _seen(scene: Scene, layout: str) -> list[tuple]:
     """(body, position, relation to what it rests on, that support's body) per body."""
     world, placed = World(scene, layout), scene.layouts[layout].placed
     return [(body, (world.poses[name].x, world.poses[name].y, world.poses[name].z),
              placed[name].relation,
-             None if placed[name].support is None else scene.bodies[placed[name].support])
+             None if placed[name].support is None else world.bodies[placed[name].support])
             for name, body in world.bodies.items()]
 
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 import hashlib
 from typing import Literal
 
+from pydantic import Field
+
 from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Step
 from robofollow.compiler.model import Model
@@ -101,10 +103,25 @@ class Placed(Model):
     relation: Literal["table", "on", "in"] = "table"
 
 
+class Colour(Model):
+    """A body's colour in a layout (`recolor`): its colour word and what the cameras see."""
+
+    color: lf.Color
+    rgb: tuple[float, float, float]
+
+
+def shown(body: Body, colours: dict[str, Colour]) -> Body:
+    """The body in the colour `colours` (a layout's, by body) give it, if they give one."""
+    colour = colours.get(body.id)
+    return body if colour is None else body.model_copy(update=colour.model_dump())
+
+
 class Layout(Model):
     name: str
     base: str | None = None
     placed: dict[str, Placed]
+    # by body: recoloured here or in a base (`recolor`)
+    colours: dict[str, Colour] = Field(default_factory=dict)
 
 
 class Expected(Model):
@@ -173,12 +190,17 @@ class Scene(Model):
     def jitter_of(self, body: str) -> Jitter:
         return self.jitter.get(body) or self.jitter.get("*") or Jitter()
 
+    def bodies_in(self, layout: str) -> dict[str, Body]:
+        """The bodies a layout places, in its order, in their colours there."""
+        chosen = self.layouts[layout]
+        return {name: shown(self.bodies[name], chosen.colours) for name in chosen.placed}
+
     @property
     def digest(self) -> str:
         """sha256 over what the scene says (not where: file names and lines are left out), so
         a scene compiled alone or beside others, from any folder, has one digest. A split
-        rule's default motion ("any") and repeats ("refused") are left out, as before the
-        attributes existed."""
+        rule's default motion ("any") and repeats ("refused") are left out, and so are the
+        colours of a layout that recolours nothing, as before these existed."""
         exclude: dict = {"tasks": {"__all__": {"source", "paraphrase_sources"}},
                          "tests": {"__all__": {"source"}}}
         defaults = {level: {key for key in _LATER_SPLIT_FIELDS
@@ -187,6 +209,10 @@ class Scene(Model):
         defaults = {level: keys for level, keys in defaults.items() if keys}
         if defaults:
             exclude["splits"] = defaults
+        uncoloured = {name: {"colours"} for name, layout in self.layouts.items()
+                      if not layout.colours}
+        if uncoloured:
+            exclude["layouts"] = uncoloured
         data = self.model_dump_json(exclude=exclude)
         return hashlib.sha256(data.encode()).hexdigest()
 

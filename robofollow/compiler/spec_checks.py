@@ -9,6 +9,7 @@ from collections.abc import Iterable
 
 from lark import Token
 
+from robofollow.compiler import lf
 from robofollow.compiler.spec import Source
 from robofollow.compiler.spec_files import Sources, spec_error
 from robofollow.compiler.spec_syntax import Attribute, Coordinates, Number, Values
@@ -64,6 +65,15 @@ class Checks:
             else:
                 found[str(key)] = node
         return found
+
+    def colour(self, token: Token) -> str | None:
+        """The colour word written at `token`, or None (reported there, with the colours)."""
+        if token in lf.Color.__args__:
+            return str(token)
+        hint = did_you_mean(str(token), lf.Color.__args__)
+        self.error("bad-value", f"unknown colour {token!s}" + (f"; {hint}" if hint else "")
+                   + f" (colours: {', '.join(lf.Color.__args__)})", token)
+        return None
 
     def checked(self, token: Token, what: str, bounds: tuple[float, float], unit: str = "",
                 whole: bool = False) -> float | None:

@@ -25,7 +25,7 @@ from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Step
 from robofollow.compiler.footprints import Footprints
 from robofollow.compiler.layouts import LayoutResolver
-from robofollow.compiler.observation import looks_alike
+from robofollow.compiler.observation import misnamed_twin
 from robofollow.compiler.parser import parse
 from robofollow.compiler.spec import (
     FRICTION_RANGE,
@@ -245,7 +245,7 @@ class _Loader(SplitChecks):
         for body in bodies.values():
             if body.id in self.broken:
                 continue
-            twin = next((b for b in seen if looks_alike(b, body) and b.color != body.color), None)
+            twin = misnamed_twin(body, seen)
             if twin is not None:
                 self.error("colour-mismatch", f"{body.id} looks the same as {twin.id} (kind, "
                            f"size, rgb) but is called {body.color}, not {twin.color}",
@@ -288,11 +288,9 @@ class _Loader(SplitChecks):
         if missing and len(self.errors) == errors_before:  # (else it may be one misspelt)
             self.error("missing-attribute", f"{name!s} needs {', '.join(missing)}", name)
         color = found["color"].value if "color" in found else None
-        if color is not None and (not isinstance(color, Name)
-                                  or color.token not in lf.Color.__args__):
-            where = color.token if isinstance(color, Name) else found["color"].key
-            self.error("bad-value", f"color must be one of {', '.join(lf.Color.__args__)}", where)
-            color = None
+        if color is not None and not isinstance(color, Name):
+            self.error("bad-value", "color takes a colour name", found["color"].key)
+        color = self.colour(color.token) if isinstance(color, Name) else None
         rgb = self.numbers(found["rgb"], 3, RGB_RANGE) if "rgb" in found else None
         half = self.size(str(kind), found) if known else None
         physics = {key: self.number(found[key], bounds, unit) for key, (bounds, unit) in
@@ -301,7 +299,7 @@ class _Loader(SplitChecks):
         if color is None or half is None or rgb is None or None in physics.values():
             self.broken.add(str(name))
         return Body(id=str(name), kind=str(kind) if known else "cube", fixture=fixture,
-                    color=str(color.token) if color is not None else "red",
+                    color=color or "red",
                     rgb=rgb or (0.5, 0.5, 0.5), half_extents=half or (0.02, 0.02, 0.02),
                     **{key: value for key, value in physics.items() if value is not None})
 

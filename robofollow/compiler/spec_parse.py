@@ -15,7 +15,7 @@ from robofollow.errors import SpecError, did_you_mean
 # as grammar/spec.lark orders them
 SCENE_STATEMENTS = ("point", "object", "fixture", "jitter", "set", "layout", "task", "test",
                     "split")
-LAYOUT_OPERATIONS = ("at", "on", "in", "swap", "move", "remove", "put")
+LAYOUT_OPERATIONS = ("at", "on", "in", "swap", "move", "remove", "put", "recolor")
 PLACEMENTS = ("at", "on", "in")  # a layout operation that starts with the body's name
 _SCENE_START = {"OBJECT", "LAYOUT", "TASK"}  # expected where a scene statement may start
 

@@ -91,12 +91,14 @@ class SettingNode:
 @dataclass(frozen=True, slots=True)
 class LayoutOp:
     """One line of a layout: at, move (a position), on, in_, put_on, put_in, swap (another
-    body), remove."""
+    body), remove, recolor (a colour word and its rgb)."""
 
     kind: str
     body: Token
     other: Token | None = None
     position: Coordinates | Token | None = None  # coordinates, or a point's name
+    colour: Token | None = None
+    rgb: Attribute | None = None
 
 
 @dataclass(frozen=True, slots=True)
@@ -233,6 +235,12 @@ class _ToNodes(Transformer):
 
     def remove(self, body):
         return LayoutOp("remove", body)
+
+    def recolor(self, body, colour, rgb):
+        return LayoutOp("recolor", body, colour=colour, rgb=rgb)
+
+    def rgb(self, key, _equals, value):  # rgb=(r, g, b) of a recolor, an attribute as written
+        return Attribute(key, value)
 
     def task(self, label, layout, *strings_and_expect):
         *strings, expect = strings_and_expect

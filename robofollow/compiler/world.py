@@ -51,7 +51,7 @@ class World:
         self.scene = scene
         self.layout = scene.layouts[layout]
         self.table = scene.table_height
-        self.bodies: dict[str, Body] = {b: scene.bodies[b] for b in self.layout.placed}
+        self.bodies: dict[str, Body] = scene.bodies_in(layout)
         offsets = offsets or {}
         self.poses: dict[str, Pose] = {b: Pose(*map(float, p)) for b, p in (positions or {}).items()}
         for body in self.layout.placed:

@@ -109,11 +109,12 @@ def _template() -> jinja2.Template:
 
 
 def scene_xml(scene: Scene, layout: str, width: int = 320, height: int = 240) -> str:
-    """The MJCF of one layout of a scene, bodies at their nominal positions."""
+    """The MJCF of one layout of a scene, bodies at their nominal positions in their colours
+    there."""
     placed = scene.layouts[layout].placed
     objects, fixtures = [], []
-    for name, where in placed.items():
-        body = scene.bodies[name]
+    for name, body in scene.bodies_in(layout).items():
+        where = placed[name]
         if body.fixture:
             fixtures.append(_fixture(body, (where.x, where.y, where.z)))
         else:
