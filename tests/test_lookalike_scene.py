@@ -1,7 +1,7 @@
 """A new scene family beside the shipped specs: three identical-looking yellow cubes, two
-square labels, layouts that swap or move referents (and one where only look-alikes trade
-places), listed tests and L1-L3 rules with a max. It compiles clean beside the shipped four
-scenes, and theirs stay what they are compiled alone."""
+square labels, layouts that swap or move referents, listed tests and L1-L3 rules with a max. It compiles clean
+beside the shipped four scenes, and theirs stay what they are compiled alone; a layout where
+only look-alikes trade places is an error where a rule tests on it."""
 
 from __future__ import annotations
 
@@ -48,9 +48,9 @@ scene scene5 "Look-alike objects and labels" {
     layout scene5_same from default { swap yellow_cube_1 yellow_cube_3 }
 
     split L0 rounds=2 seed=5
-    split L1 layouts=(scene5_1, scene5_2, scene5_3, scene5_4, scene5_same) max=12 rounds=2 seed=5
+    split L1 layouts=(scene5_1, scene5_2, scene5_3, scene5_4) max=12 rounds=2 seed=5
     split L2 wordings=(referents) max=16 rounds=2 seed=5
-    split L3 layouts=(scene5_1, scene5_2, scene5_3, scene5_4, scene5_same)
+    split L3 layouts=(scene5_1, scene5_2, scene5_3, scene5_4)
         wordings=(referents) max=12 rounds=2 seed=5
 
     task s5_pickup_red_cube on default {
@@ -120,7 +120,6 @@ def test_a_look_alike_scene_compiles_clean_beside_the_shipped_specs(tmp_path):
     assert {t.id for t in scene5 if t.wording == "listed"} == {
         "scene5/L1/blue_cylinder_beside_yellow", "scene5/L2/the_cylinder",
         "scene5/L3/the_cylinder_labels_swapped"}
-    assert not [t.id for t in scene5 if t.layout == "scene5_same"]  # only look-alikes moved
     assert any("yellow" in t.instruction for t in scene5 if t.level == "L2")
     alone = compile_specs(builtin_specs())
     for scene in SHIPPED:
@@ -131,3 +130,13 @@ def test_a_look_alike_scene_compiles_clean_beside_the_shipped_specs(tmp_path):
     assert _tasks(by_itself, "scene5") == _tasks(compiled, "scene5")
     assert by_itself.split_digests["scene5"] == compiled.split_digests["scene5"]
 
+
+
+def test_a_layout_where_only_look_alikes_trade_places_is_an_error(tmp_path, capsys):
+    spec = tmp_path / "scene5.rf"
+    spec.write_text(SCENE5.replace("scene5_4) max=12", "scene5_4, scene5_same) max=12"))
+    assert main(["compile", str(spec), "--out", str(tmp_path / "out"), "--no-verify"]) == 1
+    err = capsys.readouterr().err
+    assert f"{spec}:31:12: error[looks-like-training]: layout scene5_same looks the same as " \
+        "the training layout default" in err
+    assert "Traceback" not in err

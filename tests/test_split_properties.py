@@ -7,6 +7,7 @@ import math
 import tempfile
 from pathlib import Path
 
+import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
@@ -101,11 +102,14 @@ def test_a_swap_of_identical_looking_bodies_is_never_a_changed_layout(generated)
     compiled = compile_or_skip(generated["text"])
     scene = compiled.spec.scenes["demo"]
     assert same_observation(scene, "base", "look_alike")
-    assert not [t for t in compiled.splits.tasks if t.layout == "look_alike"]
-    assert any("layout look_alike yields no task" in w
-               for w in compiled.report["split_rules"]["warnings"])
-    assert all("looks the same as base" in r.reason for r in compiled.splits.rejected
-               if r.layout == "look_alike")
+    text = generated["text"]
+    tested = (text.replace("    split L1 layouts=(", "    split L1 layouts=(look_alike, ")
+              if "    split L1 layouts=(" in text else
+              text.replace("    split L2 ", "    split L1 layouts=(look_alike)\n    split L2 "))
+    with pytest.raises(SpecErrors) as raised:  # a rule may not test on it
+        compile_text(tested)
+    assert [(e.code, "layout look_alike looks the same as the training layout base" in e.message)
+            for e in raised.value.errors] == [("looks-like-training", True)]
     # the training motions, performed with the twins' names traded, are still trained motions
     repertoire = Repertoire(scene, compiled.training)
     trade = {"o0": "t0", "t0": "o0"}
@@ -209,8 +213,6 @@ def test_scenes_compiled_together_audit_clean_and_match_each_alone(generated):
             listed = {t.level for t in compiled.splits.tasks
                       if t.scene == sid and t.wording == "listed"}
             assert listed == set(scene["listed"])
-            assert not [t.id for t in compiled.splits.tasks if t.scene == sid
-                        and t.layout == "same"]  # only look-alikes traded places
             alone = folder / "alone" / sid
             alone.mkdir(parents=True)
             (alone / f"{sid}.rf").write_text(scene["text"])
