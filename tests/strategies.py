@@ -366,11 +366,11 @@ def scene_specs(draw, scene: str = "demo") -> dict:
             lines += [f"    test L2 listed_{scene}_l2 on base {{",
                       f'        "{text.replace(name[body], f"the {kind}")}."', "    }"]
             listed.append("L2")
-    rule = ", ".join(layouts)
-    lines += [f"    split L1 layouts=({rule}) max={maximum['L1']} rounds=2 seed=7",
+    rule = f"layouts=({', '.join(layouts)}) " if layouts else ""
+    lines += [f"    split L1 {rule}max={maximum['L1']} rounds=2 seed=7",
               (f"    split L2 wordings=({', '.join(wordings)}) max={maximum['L2']} rounds=2 "
                "seed=7"),
-              (f"    split L3 layouts=({rule}) wordings=(referents) max={maximum['L3']} "
+              (f"    split L3 {rule}wordings=(referents) max={maximum['L3']} "
                "rounds=2 seed=7"),
               "}"]
     return {"id": scene, "text": "\n".join(lines) + "\n", "max": maximum, "listed": listed}
