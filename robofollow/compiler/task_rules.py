@@ -109,10 +109,19 @@ class SeenTasks:
     def __init__(self, scene: Scene):
         self.scene = scene
         self.seen: dict[tuple[str, str], list[tuple[str, str]]] = {}
+        self._same: dict[tuple[str, str], bool] = {}
+
+    def looks_same(self, a: str, b: str) -> bool:
+        """Whether two layouts are one or look the same (memoised; the relation is
+        symmetric)."""
+        key = (a, b) if a <= b else (b, a)
+        if key not in self._same:
+            self._same[key] = a == b or same_observation(self.scene, a, b)
+        return self._same[key]
 
     def repeat(self, level: str, layout: str, form: str) -> str | None:
         for other_layout, other in self.seen.get((level, form), ()):
-            if other_layout == layout or same_observation(self.scene, layout, other_layout):
+            if self.looks_same(layout, other_layout):
                 where = ("" if other_layout == layout else
                          f" ({layout} looks the same as {other_layout})")
                 return f"it repeats {other}: the same meaning on the same layout{where}"
