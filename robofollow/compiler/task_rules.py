@@ -178,6 +178,7 @@ class TaskRules:
         self.seen = SeenTasks(scene)
         self.repertoire = Repertoire(scene, training)
         self._grounders: dict[str, list[Grounder]] = {}
+        self._infeasible: dict[tuple[str, Behaviour], list[str]] = {}
 
     def grounders(self, layout: str) -> list[Grounder]:
         """The layout's grounders: nominal positions first, then the jitter extremes."""
@@ -228,7 +229,11 @@ class TaskRules:
         return [p for step in task.behaviour.steps for p in degenerate_routes(step, task.world)]
 
     def _feasibility(self, task: _Grounded) -> list[str]:
-        return infeasible(task.behaviour, task.world)
+        """(memoised per layout: many candidates ask for one behaviour)"""
+        key = task.world.layout.name, task.behaviour
+        if key not in self._infeasible:
+            self._infeasible[key] = infeasible(task.behaviour, task.world)
+        return self._infeasible[key]
 
     def _repertoire(self, task: _Grounded) -> list[str]:
         missing = self.repertoire.missing(task.behaviour, task.world,
