@@ -36,7 +36,6 @@ from robofollow.benchmark.episode import Episode
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.spec import LEVELS, Scene, Spec
 from robofollow.compiler.spec_files import spec_files
-from robofollow.files import json_line
 from robofollow.resources import cache_root
 
 FORMAT = 2  # bump when the file layout or the records' meaning changes
@@ -258,12 +257,11 @@ def _compile(entry: Entry) -> bytes | None:
 
 def _episodes(compiled) -> tuple[tuple[str, ...], tuple[bytes, ...]]:
     """A compile's episodes: their ids, and their records as the build writes them."""
-    from robofollow.benchmark.rounds import episode_records, ordered_tasks
+    from robofollow.benchmark.rounds import episode_lines, ordered_tasks
 
-    records = [record for task in ordered_tasks(compiled)
-               for record in episode_records(compiled, task)]
-    return (tuple(record["episode"] for record in records),
-            tuple(json_line(record, sort_keys=True).rstrip("\n").encode() for record in records))
+    lines = [line for task in ordered_tasks(compiled) for line in episode_lines(compiled, task)]
+    return (tuple(episode for episode, _ in lines),
+            tuple(line.rstrip("\n").encode() for _, line in lines))
 
 
 def _parse(data: bytes, key: str) -> Part:

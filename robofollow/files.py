@@ -21,7 +21,25 @@ def json_line(record, sort_keys: bool = False) -> str:
     """One JSON Lines record with its newline. Text stays readable UTF-8, except U+2028 and
     U+2029, which are escaped: line-splitting readers (Python's str.splitlines, JavaScript)
     would break the record at them."""
-    text = json.dumps(record, ensure_ascii=False, sort_keys=sort_keys)
+    return _line_of(json.dumps(record, ensure_ascii=False, sort_keys=sort_keys))
+
+
+_SORTED = json.JSONEncoder(ensure_ascii=False, sort_keys=True)  # as json_line(..., True)
+
+
+def json_value(value) -> str:
+    """A value as `json_line(..., sort_keys=True)` writes it inside a record."""
+    return _SORTED.encode(value)
+
+
+def json_line_of(encoded: dict[str, str]) -> str:
+    """`json_line(record, sort_keys=True)` of a record whose values come encoded (json_value):
+    records that share most of their values need them encoded once."""
+    return _line_of("{" + ", ".join(f"{_SORTED.encode(key)}: {encoded[key]}"
+                                    for key in sorted(encoded)) + "}")
+
+
+def _line_of(text: str) -> str:
     return text.replace("\u2028", "\\u2028").replace("\u2029", "\\u2029") + "\n"
 
 
@@ -77,8 +95,8 @@ def not_utf8(data: bytes, error: UnicodeDecodeError) -> tuple[int, int, str, str
     column = len(data[line_start:start].decode("utf-8")) + 1
     shown = data[line_start:line_end if line_end >= 0 else len(data)].decode(
         "utf-8", errors="replace").removesuffix("\r")
-    return line, column, shown, f"the file is not UTF-8 text: byte 0x{data[start]:02x} " \
-                                f"({error.reason})"
+    return line, column, shown, (f"the file is not UTF-8 text: byte 0x{data[start]:02x} "
+                                 f"({error.reason})")
 
 
 @dataclass(frozen=True)

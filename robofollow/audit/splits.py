@@ -67,7 +67,7 @@ def task_findings(spec: Spec, training: dict[str, Behaviour], splits: Splits,
 
 def training_ambiguities(spec: Spec, training: dict[str, Behaviour]) -> list[dict]:
     """Training instructions that fail to ground, or ground differently, under jitter
-    extremes."""
+    extremes (a task's paraphrases mostly share their form: each form is checked once)."""
     findings = []
     grounders: dict[tuple[str, str], list[Grounder]] = {}
     for task in spec.tasks:
@@ -75,8 +75,12 @@ def training_ambiguities(spec: Spec, training: dict[str, Behaviour]) -> list[dic
         if key not in grounders:
             grounders[key] = [Grounder(w) for w in jitter_worlds(spec.scenes[task.scene],
                                                                  task.layout)]
+        problems: dict[str, str | None] = {}  # form JSON -> its problem
         for index, form in enumerate(task.forms):
-            problem = instability(form, grounders[key], training[task.label])
+            data = lf.to_json(form)
+            if data not in problems:
+                problems[data] = instability(form, grounders[key], training[task.label])
+            problem = problems[data]
             if problem:
                 findings.append({"task": f"{task.label}#{index + 1}", "finding": problem})
     return findings

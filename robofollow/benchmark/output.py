@@ -21,7 +21,7 @@ import shutil
 from pathlib import Path
 
 from robofollow.benchmark.pipeline import Compiled
-from robofollow.benchmark.rounds import episode_records
+from robofollow.benchmark.rounds import episode_lines
 from robofollow.benchmark.summary import changes, summary
 from robofollow.compiler.goals import goal_graph, graph_to_dict
 from robofollow.compiler.plans import plan
@@ -213,7 +213,7 @@ def _write_files(compiled: Compiled, out: Path, changed: str) -> None:
             tasks = compiled.splits.of(scene, level)
             with open(out / "episodes" / f"{scene}_{level}.jsonl", "w", encoding="utf-8") as f:
                 for task in tasks:
-                    f.writelines(_line(record) for record in episode_records(compiled, task))
+                    f.writelines(line for _, line in episode_lines(compiled, task))
             with open(out / "tasks" / f"{scene}_{level}.jsonl", "w", encoding="utf-8") as f:
                 for task in tasks:
                     world = World(compiled.spec.scenes[scene], task.layout)

@@ -12,40 +12,56 @@ from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.spec import LEVELS, SplitRule
 from robofollow.compiler.splits import TestTask, episode_seed
 from robofollow.errors import RoboFollowError
-from robofollow.files import json_line
+from robofollow.files import json_line_of, json_value
 
 
-def _rounds(compiled: Compiled, task: TestTask) -> Iterator[tuple[Episode, dict]]:
-    """Each round of the task's level's split rule: the episode, and its record as the build
-    writes it (the hash covers the scene's digest and the rest of the record but the split
-    digest, so an episode keeps its hash while other tasks of its scene change)."""
-    scene = compiled.spec.scenes[task.scene]
-    rule = scene.splits.get(task.level) or SplitRule(level=task.level)
-    split = compiled.split_digests[task.scene][:16]
-    first = Episode(id=f"{task.id}#r1", task=task.id, scene=task.scene, level=task.level,
-                    layout=task.layout, instruction=task.instruction, lf=task.form,
-                    behaviour=task.behaviour, round=1, seed=0, motion=task.motion, hash="",
-                    split=split)
+def _first(compiled: Compiled, task: TestTask) -> Episode:
+    """The task's first episode, its hash left empty."""
+    return Episode(id=f"{task.id}#r1", task=task.id, scene=task.scene, level=task.level,
+                   layout=task.layout, instruction=task.instruction, lf=task.form,
+                   behaviour=task.behaviour, round=1, seed=0, motion=task.motion, hash="",
+                   split=compiled.split_digests[task.scene][:16])
+
+
+def _rounds(compiled: Compiled, task: TestTask, first: Episode) -> Iterator[tuple[dict, str]]:
+    """Each round of the task's level's split rule: the episode's record and its JSON line,
+    as the build writes them (the hash covers the scene's digest and the rest of the record
+    but the split digest, so an episode keeps its hash while other tasks of its scene
+    change). The values the rounds share are encoded once."""
+    rule = compiled.spec.scenes[task.scene].splits.get(task.level) or SplitRule(level=task.level)
     common = first.model_dump(mode="json", exclude={"hash", "split"})  # (rounds differ in 3)
+    encoded = {key: json_value(value) for key, value in common.items()}
     for round_index in range(1, rule.rounds + 1):
         varying = {"episode": f"{task.id}#r{round_index}", "round": round_index,
                    "seed": episode_seed(task.id, round_index, rule.seed)}
+        varying_encoded = {key: json_value(value) for key, value in varying.items()}
+        content = compiled.scene_digests[task.scene] + json_line_of({**encoded,
+                                                                     **varying_encoded})
+        varying["hash"] = hashlib.sha256(content.encode()).hexdigest()[:16]
+        varying["split"] = first.split
         record = {**common, **varying}
-        content = compiled.scene_digests[task.scene] + json_line(record, sort_keys=True)
-        record["hash"] = hashlib.sha256(content.encode()).hexdigest()[:16]
-        record["split"] = split
-        yield first.model_copy(update={"id": varying["episode"], "round": round_index,
-                                       "seed": varying["seed"], "hash": record["hash"]}), record
+        yield record, json_line_of({**encoded, **varying_encoded,
+                                    "hash": json_value(varying["hash"]),
+                                    "split": json_value(first.split)})
 
 
 def episodes(compiled: Compiled, task: TestTask) -> list[Episode]:
     """The task's episodes, one per round."""
-    return [episode for episode, _ in _rounds(compiled, task)]
+    first = _first(compiled, task)
+    return [first.model_copy(update={"id": record["episode"], "round": record["round"],
+                                     "seed": record["seed"], "hash": record["hash"]})
+            for record, _ in _rounds(compiled, task, first)]
 
 
 def episode_records(compiled: Compiled, task: TestTask) -> list[dict]:
     """The task's episodes as JSON records, as the build writes them."""
-    return [record for _, record in _rounds(compiled, task)]
+    return [record for record, _ in _rounds(compiled, task, _first(compiled, task))]
+
+
+def episode_lines(compiled: Compiled, task: TestTask) -> list[tuple[str, str]]:
+    """The task's episodes as the build writes them: (episode id, JSON line)."""
+    return [(record["episode"], line)
+            for record, line in _rounds(compiled, task, _first(compiled, task))]
 
 
 def ordered_tasks(compiled: Compiled) -> Iterator[TestTask]:

@@ -136,6 +136,15 @@ class Repertoire:
             self.trained.append(Trained(task.label, task.layout, steps,
                                         tuple(motion(s, world) for s in steps)))
         self.steps = [(t, i) for t in self.trained for i in range(len(t.steps))]
+        # keyed by the world's identity; the entry keeps the world alive (as Grounder does)
+        self._motions: dict[tuple[int, Step], tuple[World, Motion]] = {}
+
+    def motion(self, step: Step, world: World) -> Motion:
+        """`motion` (memoised: a world does not change, and many candidates share a step)."""
+        cached = self._motions.get((id(world), step))
+        if cached is None or cached[0] is not world:
+            cached = self._motions[id(world), step] = world, motion(step, world)
+        return cached[1]
 
     def covers(self, behaviour: Behaviour, world: World, compose: bool) -> bool:
         return self.missing(behaviour, world, compose) is None
@@ -143,7 +152,7 @@ class Repertoire:
     def missing(self, behaviour: Behaviour, world: World, compose: bool) -> str | None:
         """None when training performs the behaviour (step by step if `compose`, else as a
         whole); otherwise what is new, against the nearest training motion."""
-        motions = [motion(s, world) for s in behaviour.steps]
+        motions = [self.motion(s, world) for s in behaviour.steps]
         for index, m in enumerate(motions):
             if not any(not differences(m, t.motions[i]) for t, i in self.steps):
                 return self._new_step(behaviour, index, m)
@@ -177,14 +186,14 @@ class Repertoire:
         """Whether `behaviour` moves as training task `label` does, step for step (a test of
         the trained motion for the trained sentence: a memorised replay passes it)."""
         trained = next((t for t in self.trained if t.label == label), None)
-        motions = [motion(s, world) for s in behaviour.steps]
+        motions = [self.motion(s, world) for s in behaviour.steps]
         return trained is not None and len(motions) == len(trained.motions) and all(
             not differences(a, b) for a, b in zip(motions, trained.motions, strict=True))
 
     def arm_for(self, behaviour: Behaviour, index: int, world: World) -> str | None:
         """The one arm training performs step `index` of `behaviour` with (every other part
         alike), or None when it uses none or both."""
-        m = motion(behaviour.steps[index], world)
+        m = self.motion(behaviour.steps[index], world)
         arms = {t.motions[i].arm for t, i in self.steps
                 if differences(m, t.motions[i]) in ([], ["arm"])}
         return arms.pop() if len(arms) == 1 else None

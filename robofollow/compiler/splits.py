@@ -17,6 +17,7 @@ are kept first and count toward the rule's `max`.
 from __future__ import annotations
 
 import hashlib
+from dataclasses import dataclass, field
 from typing import Literal
 
 from robofollow.compiler import lf
@@ -91,6 +92,25 @@ def motion_kind(rules: TaskRules, behaviour: Behaviour, layout: str, origin: str
     """'as-trained' when the expert moves as the origin training task does, else 'moved'."""
     world = rules.grounders(layout)[0].world
     return "as-trained" if rules.repertoire.as_trained(behaviour, world, origin) else "moved"
+
+
+@dataclass
+class _Queue:
+    """One source's reworded candidates, (task id, wording, form, form JSON, form digest) in
+    id-digest order, examined in turn until the level's limit of them are kept."""
+    origin: str
+    layout: str
+    candidates: list[tuple[str, str, lf.Instruction, str, str]]
+    examined: int = 0
+    kept: int = 0
+    forms: dict[str, int] = field(init=False)  # form JSON -> its last place
+
+    def __post_init__(self):
+        self.forms = {c[3]: place for place, c in enumerate(self.candidates)}
+
+    def done(self, limit: int | None) -> bool:
+        return self.examined == len(self.candidates) or (limit is not None
+                                                         and self.kept >= limit)
 
 
 class _Generator:
@@ -168,11 +188,35 @@ class _Generator:
                 self.consider("L1", layout, task.paraphrases[0], task.forms[0], task.label,
                               "training")
 
-    def reworded(self, level: Level, layout: str, form: lf.Instruction, origin: str,
+    def reworded(self, level: Level, sources: list[tuple[str, lf.Instruction, str]],
                  wordings: tuple[str, ...]) -> None:
-        """Candidates from each generator, and from each pair of generators in rule order,
-        considered in the order the cap ranks them (id digest) until `limit` are kept: the
-        cap could choose none after those."""
+        """Candidates for each (layout, form, origin) source from each generator, and from
+        each pair of generators in rule order; a source's queue is in the order the cap ranks
+        them (id digest) and stops at the level's limit of kept ones. The rules see the
+        queues as if one after the other, but only as far as the cap can choose: place by
+        place in the queues (every queue's next kept candidate) until the kept ones so far
+        fill the limit. A candidate waits for the verdicts of the earlier queues' candidates
+        that the duplicate rule weighs it against (its form on a layout that looks the same)."""
+        limit = self.limit(level)
+        queues = [self.queue(level, layout, form, origin, wordings)
+                  for layout, form, origin in sources]
+        order: dict[str, tuple[int, int]] = {}  # kept task id -> (queue, place)
+        rank = 0
+        while any(not queue.done(limit) for queue in queues):
+            for index, queue in enumerate(queues):
+                while queue.kept <= rank and self.examine_next(level, queues, index, limit,
+                                                               order):
+                    pass
+            if limit is not None and sum(min(q.kept, rank + 1) for q in queues) >= limit:
+                break
+            rank += 1
+        mine = [t for t in self.tasks if t.id in order]
+        self.tasks = [t for t in self.tasks if t.id not in order] + sorted(
+            mine, key=lambda t: order[t.id])
+
+    def queue(self, level: Level, layout: str, form: lf.Instruction, origin: str,
+              wordings: tuple[str, ...]) -> _Queue:
+        """One source's candidates, in id-digest order."""
         if layout not in self.describers:
             self.describers[layout] = Describer(self.rules.grounders(layout)[0],
                                                 self.constructs)
@@ -182,15 +226,31 @@ class _Generator:
             digest = hashlib.sha256(data.encode()).hexdigest()
             task_id = f"{self.scene.id}/{level}/{origin}@{layout}/{wording}-{digest[:8]}"
             candidates.append((_digest_of(task_id), task_id, wording, novel, data, digest))
-        kept, limit = 0, self.limit(level)
-        for _, task_id, wording, novel, data, digest in sorted(candidates, key=lambda c: c[:2]):
-            if limit is not None and kept >= limit:
-                return
-            text, problem = self.speak(novel, data, int(digest[:8], 16), layout)
-            if problem:
-                self.reject(level, layout, text, origin, problem)
-            else:
-                kept += self.consider(level, layout, text, novel, origin, wording, task_id)
+        return _Queue(origin, layout, [c[1:] for c in sorted(candidates, key=lambda c: c[:2])])
+
+    def examine_next(self, level: Level, queues: list[_Queue], index: int, limit: int | None,
+                     order: dict[str, tuple[int, int]]) -> bool:
+        """Speak and consider queue `index`'s next candidate, after the earlier queues'
+        candidates of its form on a layout that looks the same; whether there was one."""
+        queue = queues[index]
+        if queue.done(limit):
+            return False
+        place = queue.examined
+        task_id, wording, novel, data, digest = queue.candidates[place]
+        for other, other_queue in enumerate(queues[:index]):
+            if data in other_queue.forms and self.rules.seen.looks_same(queue.layout,
+                                                                        other_queue.layout):
+                while (other_queue.examined <= other_queue.forms[data]
+                       and self.examine_next(level, queues, other, limit, order)):
+                    pass
+        queue.examined += 1
+        text, problem = self.speak(novel, data, int(digest[:8], 16), queue.layout)
+        if problem:
+            self.reject(level, queue.layout, text, queue.origin, problem)
+        elif self.consider(level, queue.layout, text, novel, queue.origin, wording, task_id):
+            queue.kept += 1
+            order[task_id] = index, place
+        return True
 
     def speak(self, form: lf.Instruction, form_json: str, pick: int,
               layout: str) -> tuple[str, str | None]:
@@ -255,15 +315,16 @@ class _Generator:
 
     def level2(self) -> None:
         rule = self.scene.splits.get("L2")
-        for task in self.scene.tasks if rule else ():
-            self.reworded("L2", task.layout, task.forms[0], task.label, rule.wordings)
+        if rule:
+            self.reworded("L2", [(t.layout, t.forms[0], t.label) for t in self.scene.tasks],
+                          rule.wordings)
 
     def level3(self) -> None:
         rule = self.scene.splits.get("L3")
         generated_l1 = [t for t in self.tasks if t.level == "L1" and t.wording == "training"]
-        for task in generated_l1 if rule else []:
-            if task.layout in rule.layouts:
-                self.reworded("L3", task.layout, task.form, task.origin, rule.wordings)
+        if rule:
+            self.reworded("L3", [(t.layout, t.form, t.origin) for t in generated_l1
+                                 if t.layout in rule.layouts], rule.wordings)
 
     def run(self, levels: tuple[Level, ...]) -> None:
         for level in levels:

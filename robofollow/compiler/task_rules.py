@@ -109,10 +109,19 @@ class SeenTasks:
     def __init__(self, scene: Scene):
         self.scene = scene
         self.seen: dict[tuple[str, str], list[tuple[str, str]]] = {}
+        self._same: dict[tuple[str, str], bool] = {}
+
+    def looks_same(self, a: str, b: str) -> bool:
+        """Whether two layouts are one or look the same (memoised; the relation is
+        symmetric)."""
+        key = (a, b) if a <= b else (b, a)
+        if key not in self._same:
+            self._same[key] = a == b or same_observation(self.scene, a, b)
+        return self._same[key]
 
     def repeat(self, level: str, layout: str, form: str) -> str | None:
         for other_layout, other in self.seen.get((level, form), ()):
-            if other_layout == layout or same_observation(self.scene, layout, other_layout):
+            if self.looks_same(layout, other_layout):
                 where = ("" if other_layout == layout else
                          f" ({layout} looks the same as {other_layout})")
                 return f"it repeats {other}: the same meaning on the same layout{where}"
@@ -169,6 +178,7 @@ class TaskRules:
         self.seen = SeenTasks(scene)
         self.repertoire = Repertoire(scene, training)
         self._grounders: dict[str, list[Grounder]] = {}
+        self._infeasible: dict[tuple[str, Behaviour], list[str]] = {}
 
     def grounders(self, layout: str) -> list[Grounder]:
         """The layout's grounders: nominal positions first, then the jitter extremes."""
@@ -219,7 +229,11 @@ class TaskRules:
         return [p for step in task.behaviour.steps for p in degenerate_routes(step, task.world)]
 
     def _feasibility(self, task: _Grounded) -> list[str]:
-        return infeasible(task.behaviour, task.world)
+        """(memoised per layout: many candidates ask for one behaviour)"""
+        key = task.world.layout.name, task.behaviour
+        if key not in self._infeasible:
+            self._infeasible[key] = infeasible(task.behaviour, task.world)
+        return self._infeasible[key]
 
     def _repertoire(self, task: _Grounded) -> list[str]:
         missing = self.repertoire.missing(task.behaviour, task.world,

@@ -92,10 +92,20 @@ class Describer:
                         for rank in (1, 2, 3)]
         if "middle" in self.constructs:
             options.append((lf.MiddleIs(),))
+        options = [constraints for constraints in options if self._meets(body, constraints)]
         refs = (lf.Ref(noun=noun, constraints=constraints)
                 for noun in nouns for constraints in options)  # distinct by construction
         return [ref for ref in refs
                 if self.unique(ref, body) and not vacuous_comparisons(ref, self.grounder)]
+
+    def _meets(self, body: str, constraints: tuple) -> bool:
+        """Whether `body` meets the plain constraints (those of a description that picks it
+        out do): most options fail here, before a description is built."""
+        try:
+            return all(self.grounder.satisfies(body, c) for c in constraints
+                       if not isinstance(c, lf.COMPARATIVES))
+        except GroundingError:  # a landmark that is itself unclear: `unique` says no too
+            return False
 
 
 def _commands(form: lf.Instruction) -> list[tuple[str, lf.Pick | lf.Place | lf.Push]]:
