@@ -92,4 +92,4 @@ def test_a_listed_instruction_that_does_not_parse_is_shown_with_a_caret(tmp_path
     line = next(i for i, text in enumerate(path.read_text().splitlines(), start=1)
                 if "pik up" in text)
     assert f"{path}:{line}:31: error[instruction-unknown_word]" in err
-    assert err.splitlines()[-2].strip() == "^^^"
+    assert [line.strip() for line in err.splitlines()[-3:-1]] == ["^^^", "did you mean: 'pick'?"]
