@@ -151,12 +151,14 @@ def test_a_degenerate_route_is_always_found(geometry, behind, side, mode):
     middle = (x + length / 2 * ux - side * uy, y + length / 2 * uy + side * ux)
     found = degenerate_routes(step, _route_world((x, y), target, middle))
     if mode == "via":  # halfway, within the band: on the way; beyond the band: off it
+        assume(abs(abs(side) - ROUTE_BAND) > 1e-9)  # (not at the band's edge: rounding decides)
         assert bool(found) == (abs(side) > ROUTE_BAND), found
         return
     # 'avoid w' is never sound here (w has no column mate to carry over instead); it is off
     # the path where the carried slab's swept footprint and w's do not meet
     reach = 2 * (abs(ux) * 0.028 + abs(uy) * 0.018)
     assert len(found) == 1
+    assume(abs(abs(side) - min(reach, ROUTE_BAND)) > 1e-9)
     assert ("off the straight path" in found[0]) == (abs(side) > min(reach, ROUTE_BAND)), found
 
 

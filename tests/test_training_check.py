@@ -73,8 +73,8 @@ def test_ambiguity_lists_the_candidates(tmp_path):
 
 def test_a_training_route_off_the_way_is_an_error(tmp_path):
     """scene3_3 puts the blue slab in the red slab's own column: passing over it turns back."""
-    text = (SPECS / "scene3.rf").read_text()
-    end = text.rindex("}")
+    text = (SPECS / "scene3.rf").read_text().replace(" scene3_3,", "")  # (a training layout
+    end = text.rindex("}")  # is no changed layout for the L1 and L3 rules to test on)
     (tmp_path / "scene3.rf").write_text(text[:end] + '''
     task backwards on scene3_3 {
         "Use your right arm to pick up the red slab, pass over the blue slab, and place it on the blue square label with the short side facing front."
