@@ -98,12 +98,20 @@ _ORDINAL_WORDS = {1: "first", 2: "second", 3: "third", 4: "fourth", 5: "fifth"}
 _NEARNESS_WORDS = {"nearest": "closest to", "farthest": "farthest from"}
 
 
+_PREMODIFIERS = (lf.ColorIs, lf.SizeIs, lf.ExtremeIs, lf.MiddleIs, lf.NotKind, lf.OrdinalIs)
+
+
 def _english_order(c: lf.Constraint) -> int:
     """Premodifiers in English order: superlative or 'middle', then size, then colour or kind
     ('the rightmost smaller red cube'), so that the natural reading is the scored one."""
     if isinstance(c, (lf.ExtremeIs, lf.MiddleIs)):
         return 0
     return 1 if isinstance(c, lf.SizeIs) else 2
+
+
+def _premodified(ref: lf.Ref) -> bool:
+    """Whether every constraint of a reference is said before its noun (`Realizer.landmark`)."""
+    return all(isinstance(c, _PREMODIFIERS) for c in ref.constraints)
 
 
 @cache
@@ -235,14 +243,15 @@ class Realizer:
             negated = isinstance(c.property, lf.NotKind) or getattr(c.property, "negated", False)
             return str(self.t.holds(self.ref(c.subject), self.predicate(c.property), negated))
         relations = [x for x in c.ref.constraints if isinstance(x, lf.Related)]
-        if len(relations) == 1 and not relations[0].negated and relations[0].relation in ("in", "on"):
+        if (len(relations) == 1 and not relations[0].negated
+                and relations[0].relation in ("in", "on") and _premodified(relations[0].landmark)):
             container = self.landmark(relations[0].landmark)
             rest = lf.Ref(noun=c.ref.noun,
                           constraints=tuple(x for x in c.ref.constraints if x != relations[0]))
             if self.s.condition == "state" and relations[0].relation == "in" and rest == lf.Ref(
                     noun="object"):
                 return str(self.t.emptiness(container, c.negated))
-            if self.s.condition == "possessive":
+            if self.s.condition == "possessive" and _premodified(rest):
                 thing = _article(self.landmark(rest, determiner=False))
                 frame = self.t.contains if relations[0].relation == "in" else self.t.has_on_top
                 return str(frame(container, thing, c.negated))
