@@ -8,6 +8,7 @@ import os
 import shutil
 from collections.abc import Iterator
 from dataclasses import dataclass
+from functools import cache
 from pathlib import Path
 from typing import Any
 
@@ -35,8 +36,14 @@ def json_value(value) -> str:
 def json_line_of(encoded: dict[str, str]) -> str:
     """`json_line(record, sort_keys=True)` of a record whose values come encoded (json_value):
     records that share most of their values need them encoded once."""
-    return _line_of("{" + ", ".join(f"{_SORTED.encode(key)}: {encoded[key]}"
-                                    for key in sorted(encoded)) + "}")
+    return _line_of("{" + ", ".join([_key(key) + encoded[key] for key in sorted(encoded)]) + "}")
+
+
+@cache
+def _key(key: str) -> str:
+    """A record's key as json_line writes it, with the colon (the keys repeat record after
+    record)."""
+    return _SORTED.encode(key) + ": "
 
 
 def _line_of(text: str) -> str:

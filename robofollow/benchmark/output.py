@@ -209,6 +209,7 @@ def _write_files(compiled: Compiled, out: Path, changed: str) -> None:
     (out / "episodes").mkdir()
     (out / "tasks").mkdir()
     for scene in compiled.spec.scenes:
+        worlds: dict[str, World] = {}  # by layout
         for level in LEVELS:
             tasks = compiled.splits.of(scene, level)
             with open(out / "episodes" / f"{scene}_{level}.jsonl", "w", encoding="utf-8") as f:
@@ -216,7 +217,9 @@ def _write_files(compiled: Compiled, out: Path, changed: str) -> None:
                     f.writelines(line for _, line in episode_lines(compiled, task))
             with open(out / "tasks" / f"{scene}_{level}.jsonl", "w", encoding="utf-8") as f:
                 for task in tasks:
-                    world = World(compiled.spec.scenes[scene], task.layout)
+                    if task.layout not in worlds:
+                        worlds[task.layout] = World(compiled.spec.scenes[scene], task.layout)
+                    world = worlds[task.layout]
                     f.write(_line({"task": task.id, "origin": task.origin,
                                    "wording": task.wording, "layout": task.layout,
                                    "instruction": task.instruction,

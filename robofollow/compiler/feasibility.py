@@ -36,8 +36,8 @@ from dataclasses import dataclass
 
 from robofollow.compiler import workspace
 from robofollow.compiler.behaviour import Behaviour, Step, describe_steps
-from robofollow.compiler.layouts import BOWL_FLOOR, BOWL_SEGMENTS, BOWL_WALL
 from robofollow.compiler.plans import place_spot, plan, push_points
+from robofollow.compiler.spec import BOWL_FLOOR, BOWL_SEGMENTS, BOWL_WALL
 from robofollow.compiler.world import ON_XY_TOLERANCE, World, jitter_cases
 
 ROLLING = ("sphere",)  # kinds nothing can be stacked on
@@ -119,8 +119,8 @@ def _reach(behaviour: Behaviour, world: World) -> list[str]:
             if problem:
                 problems.append(f"{point.name}: {problem}")
     if len(problems) > 1:
-        return [f"{problems[0]} (and {len(problems) - 1} more plan point"
-                f"{'s' if len(problems) > 2 else ''})"]
+        return [(f"{problems[0]} (and {len(problems) - 1} more plan point"
+                 f"{'s' if len(problems) > 2 else ''})")]
     return problems
 
 

@@ -62,12 +62,16 @@ class Grounder:
         # keyed by object identity (cheap, unlike hashing nested models); the entry keeps its
         # description alive so that an id is never reused while cached
         self._referents: dict[int, tuple[lf.Ref, tuple[str, ...]]] = {}
+        self._domains: dict[str, tuple[str, ...]] = {}
 
     # ---------------------------------------------------------------- referents
     def domain(self, noun: str) -> list[str]:
-        if noun == TABLE:
-            return [TABLE]
-        return [b for b in self.world.bodies if kind_matches(self.world, b, noun)]
+        """The bodies a noun can name (memoised)."""
+        if noun not in self._domains:
+            self._domains[noun] = ((TABLE,) if noun == TABLE else
+                                   tuple(b for b in self.world.bodies
+                                         if kind_matches(self.world, b, noun)))
+        return list(self._domains[noun])
 
     def referents(self, ref: lf.Ref) -> list[str]:
         """Every body the description fits (memoised: a world does not change)."""
@@ -218,19 +222,35 @@ class Grounder:
         return (self.step(body),)
 
     def step(self, command: lf.Pick | lf.Place | lf.Push) -> Step:
+        return Step(**self._step_fields(command))
+
+    def objects(self, instruction: lf.Instruction) -> tuple[tuple[str, str | None], ...]:
+        """The (source, target) of each step `behaviour` gives, failing as it fails, without
+        building it (the jitter check asks this of many worlds)."""
+        body = instruction
+        if isinstance(instruction, lf.Conditional):
+            body = instruction.then if self.holds(instruction.condition) else instruction.otherwise
+            if body is None:
+                return ()
+        commands = body.steps if isinstance(body, lf.Sequence) else (body,)
+        return tuple((fields["source"], fields.get("target"))
+                     for fields in map(self._step_fields, commands))
+
+    def _step_fields(self, command: lf.Pick | lf.Place | lf.Push) -> dict:
+        """The fields of the Step a command grounds to."""
         source = self.resolve(command.object)
         if source == TABLE or self.world.bodies[source].fixture:
             raise GroundingError("unsupported", f"{source} is fixed and cannot be moved")
         if isinstance(command, lf.Pick):
-            return Step(action="pick", arm=command.arm, source=source)
+            return {"action": "pick", "arm": command.arm, "source": source}
         if isinstance(command, lf.Push):
-            return Step(action="push", arm=command.arm, source=source,
-                        target=self.resolve(command.toward))
+            return {"action": "push", "arm": command.arm, "source": source,
+                    "target": self.resolve(command.toward)}
         target = self.resolve(command.destination.landmark)
         waypoints = tuple(sorted({(w.mode, self.resolve(w.landmark)) for w in command.route}))
-        return Step(action="place", arm=command.arm, source=source,
-                    relation=command.destination.relation, target=target, waypoints=waypoints,
-                    yaw_degrees=self.yaw(source, command.orientation))
+        return {"action": "place", "arm": command.arm, "source": source,
+                "relation": command.destination.relation, "target": target,
+                "waypoints": waypoints, "yaw_degrees": self.yaw(source, command.orientation)}
 
     def yaw(self, body: str, orientation: lf.Orientation | None) -> float | None:
         """The final yaw (deg, modulo 180) that puts the named side the named way."""
@@ -262,10 +282,9 @@ def first_unstable(form: lf.Instruction, grounders: list[Grounder], expected: Be
     objects = tuple((s.source, s.target) for s in expected.steps)
     for index, grounder in enumerate(grounders, start=first_case):
         try:
-            found = grounder.behaviour(form)
+            picked = grounder.objects(form)
         except GroundingError as error:
             return Unstable(index, grounder.world, error)
-        picked = tuple((s.source, s.target) for s in found.steps)
         if picked != objects:
             return Unstable(index, grounder.world, None, picked)
     return None

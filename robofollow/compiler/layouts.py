@@ -14,13 +14,9 @@ from lark import Token
 
 from robofollow.compiler.footprints import Footprints, Spot
 from robofollow.compiler.recolours import recolour
-from robofollow.compiler.spec import MAX_STACK, Body, Colour, Layout, Placed
+from robofollow.compiler.spec import BOWL_FLOOR, MAX_STACK, Body, Colour, Layout, Placed
 from robofollow.compiler.spec_checks import Checks
 from robofollow.compiler.spec_syntax import Coordinates, LayoutNode, LayoutOp
-
-BOWL_FLOOR = 0.005  # m: height of a bowl's inner floor above its bottom
-BOWL_WALL = 0.004  # m: a bowl's wall thickness (its radius is the wall's outside)
-BOWL_SEGMENTS = 16  # flat wall boxes around a bowl (face normals every 360/16 deg from +x)
 
 
 @dataclass

@@ -13,10 +13,12 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 from functools import cache
-
-import jinja2
+from typing import TYPE_CHECKING
 
 from robofollow.compiler import lf
+
+if TYPE_CHECKING:
+    import jinja2
 
 
 @dataclass(frozen=True)
@@ -116,6 +118,10 @@ def _premodified(ref: lf.Ref) -> bool:
 
 @cache
 def _frames() -> jinja2.runtime.TemplateModule:
+    """The English templates (jinja2 is imported here: `robofollow parse --help` and the
+    commands that never speak need not load it)."""
+    import jinja2
+
     env = jinja2.Environment(loader=jinja2.PackageLoader("robofollow.compiler", "templates"),
                              autoescape=False, undefined=jinja2.StrictUndefined)
     return env.get_template("english.j2").module

@@ -49,6 +49,9 @@ MAX_SEED = 2_000_000_000  # `split ... seed=`: an episode's seed (seed + 100 x r
 MAX_BODIES = 64  # objects and fixtures per scene
 MAX_LAYOUTS = 256  # layouts per scene (a layout may derive from another: `layout b from a`)
 MAX_STACK = 8  # bodies resting on (or in) one another, counting the one on the table
+BOWL_FLOOR = 0.005  # m: height of a bowl's inner floor above its bottom
+BOWL_WALL = 0.004  # m: a bowl's wall thickness (its radius is the wall's outside)
+BOWL_SEGMENTS = 16  # flat wall boxes around a bowl (face normals every 360/16 deg from +x)
 MAX_SPEC_BYTES = 4 * 1024 * 1024  # bytes per .rf file
 
 

@@ -82,8 +82,9 @@ def _variants(form: lf.Instruction, describer: Describer, wordings: tuple[str, .
             yield wording, novel
     composable = [w for w in wordings if w != "referents"]
     for index, first in enumerate(composable):
+        middles = list(GENERATORS[first](form, describer))
         for second in composable[index + 1:]:
-            for middle in GENERATORS[first](form, describer):
+            for middle in middles:
                 for novel in GENERATORS[second](middle, describer):
                     yield f"{first}+{second}", novel
 

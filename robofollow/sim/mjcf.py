@@ -17,8 +17,7 @@ import jinja2
 import numpy as np
 
 from robofollow.compiler import workspace
-from robofollow.compiler.layouts import BOWL_FLOOR, BOWL_SEGMENTS, BOWL_WALL
-from robofollow.compiler.spec import TABLE_HEIGHT, Body, Scene
+from robofollow.compiler.spec import BOWL_FLOOR, BOWL_SEGMENTS, BOWL_WALL, TABLE_HEIGHT, Body, Scene
 from robofollow.sim import robot
 from robofollow.sim.assets import ARM_MESHES, mesh_dir
 
