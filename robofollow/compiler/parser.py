@@ -50,19 +50,31 @@ def _lark() -> Lark:
                        transformer=ToSyntax(), strict=True)
 
 
-@cache
-def _machine() -> tuple[dict, int, int]:
+class _States(dict):
     """The parse table as {state: {symbol: (True, next state) | (False, (size, goto symbol,
-    callback))}}, the start state and the accepting state."""
-    inner = _lark().parser.parser.parser
-    table, callbacks = inner.parse_table, inner.callbacks
-    states = {}
-    for state, actions in table.states.items():
+    callback))}}, each row converted from lark's when first used (a process uses few of the
+    ~900)."""
+
+    def __init__(self, table, callbacks):
+        super().__init__()
+        self._table, self._callbacks = table, callbacks
+
+    def __missing__(self, state):
         # plain str keys: lark's rule names are Token objects, slower to hash and compare
-        states[state] = {str(symbol): (True, arg) if action is Shift else
-                         (False, (len(arg.expansion), str(arg.origin.name), callbacks[arg]))
-                         for symbol, (action, arg) in actions.items()}
-    return states, table.start_states["start"], table.end_states["start"]
+        row = self[state] = {
+            str(symbol): (True, arg) if action is Shift else
+            (False, (len(arg.expansion), str(arg.origin.name), self._callbacks[arg]))
+            for symbol, (action, arg) in self._table.states[state].items()}
+        return row
+
+
+@cache
+def _machine() -> tuple[_States, int, int]:
+    """The parse table (_States), the start state and the accepting state."""
+    inner = _lark().parser.parser.parser
+    table = inner.parse_table
+    return (_States(table, inner.callbacks), table.start_states["start"],
+            table.end_states["start"])
 
 
 def _syntax(text: str):
