@@ -1,7 +1,8 @@
-"""The compiled benchmark as an env reads it, cached on disk per spec file, so that an env
-starts without compiling the specs (seconds) and an edited spec compiles only its own scenes.
+"""The compiled benchmark as an env, `eval`, `serve`, `generate`, `vqa`, `expert`, `score` and
+`render` read it, cached on disk per spec file, so that they start without compiling the specs
+(seconds) and an edited spec compiles only its own scenes.
 
-An env needs the spec (its scenes), each scene's training behaviours ('did instead') and the
+They need the spec (its scenes), each scene's training behaviours ('did instead') and the
 episode records. A scene's splits depend on its own spec alone, so each .rf file is compiled
 by itself and kept in one JSON Lines file, `<cache>/compiled/<path>-<spec>-<code>.jsonl`
 (16 hex digits of the sha256 of the file's path, of its bytes and of `code_digest`): a
@@ -27,6 +28,7 @@ import os
 import secrets
 import sys
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cache, cached_property, lru_cache
 from importlib import metadata
@@ -78,6 +80,16 @@ class Episodes:
         if episode_id not in self.index:
             raise _unknown(episode_id, self.ids)
         return Episode.model_validate_json(self.lines[self.index[episode_id]])
+
+    @cached_property
+    def task_ids(self) -> tuple[str, ...]:
+        """Every test task's id, in episode order."""
+        return tuple(dict.fromkeys(episode.partition("#")[0] for episode in self.ids))
+
+    def episodes(self, keep: Callable[[str], bool] = lambda episode_id: True) -> list[Episode]:
+        """The episodes whose ids `keep` accepts, in order, each parsed afresh (only those)."""
+        return [Episode.model_validate_json(line)
+                for episode, line in zip(self.ids, self.lines) if keep(episode)]
 
     def candidates(self, scene: str) -> dict[str, Behaviour]:
         """The scene's training behaviours by label (as `Compiled.candidates`)."""
@@ -286,7 +298,12 @@ def _whole(specs: Path) -> Episodes:
     specs."""
     from robofollow.benchmark.pipeline import compile_specs
 
-    compiled = compile_specs(specs)
+    return of(compile_specs(specs))
+
+
+def of(compiled) -> Episodes:
+    """A `pipeline.Compiled` as the cache holds it (what evaluating, serving and recording
+    demonstrations read)."""
     return Episodes(compiled.spec, dict(compiled.training), *_episodes(compiled))
 
 

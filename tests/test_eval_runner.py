@@ -14,7 +14,6 @@ from pathlib import Path
 import pytest
 
 from robofollow.cli import main
-from robofollow.eval.scores import SCORES, read_scores, write_scores
 from robofollow.eval.instructions import given_instruction
 from robofollow.eval.loading import PolicyLoadError, load_policy
 from robofollow.eval.runner import (
@@ -24,9 +23,10 @@ from robofollow.eval.runner import (
     read_results,
     select_episodes,
 )
+from robofollow.eval.scores import SCORES, read_scores, write_scores
 from robofollow.eval.tables import table_text
 from robofollow.resources import builtin_specs
-from tests.sim_helpers import benchmark, episode
+from tests.sim_helpers import benchmark, cached_benchmark, episode
 
 SCENE, LEVEL = "scene1", "L0"  # 16 tasks: one round is 16 episodes
 
@@ -41,7 +41,7 @@ def _options(policy: str = "expert", **changes) -> EvalOptions:
 @pytest.fixture(scope="module")
 def expert_run(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("eval") / "expert"
-    evaluate(benchmark(), out, _options(), progress=False)
+    evaluate(cached_benchmark(), out, _options(), progress=False)
     return out
 
 
@@ -112,14 +112,14 @@ def test_a_run_folder_is_not_reused_with_other_options(tmp_path):
     out.mkdir()
     (out / "run.json").write_text(json.dumps(_options().to_json()))
     with pytest.raises(EvalRunError, match="rounds differ"):
-        evaluate(benchmark(), out, _options(rounds=2), resume=True, progress=False)
+        evaluate(cached_benchmark(), out, _options(rounds=2), resume=True, progress=False)
     with pytest.raises(EvalRunError, match="already holds a run"):
-        evaluate(benchmark(), out, _options(), progress=False)
+        evaluate(cached_benchmark(), out, _options(), progress=False)
     other = tmp_path / "other"
     other.mkdir()
     (other / "mine.txt").write_text("x")
     with pytest.raises(EvalRunError, match="not empty and holds no run"):
-        evaluate(benchmark(), other, _options(), progress=False)
+        evaluate(cached_benchmark(), other, _options(), progress=False)
 
 
 class Holder:
@@ -209,9 +209,9 @@ def test_a_run_given_other_instructions_records_the_tasks_own(tmp_path, mode):
 
 
 def test_a_sample_keeps_n_tasks_of_every_scene_and_level_spread_over_its_list():
-    every = select_episodes(benchmark(), _options(scenes=("scene1", "scene4"),
+    every = select_episodes(cached_benchmark(), _options(scenes=("scene1", "scene4"),
                                                   levels=("L0", "L1")))
-    sampled = select_episodes(benchmark(), _options(scenes=("scene1", "scene4"),
+    sampled = select_episodes(cached_benchmark(), _options(scenes=("scene1", "scene4"),
                                                     levels=("L0", "L1"), sample=3))
     for scene in ("scene1", "scene4"):
         for level in ("L0", "L1"):
@@ -219,7 +219,7 @@ def test_a_sample_keeps_n_tasks_of_every_scene_and_level_spread_over_its_list():
                                        if (e.scene, e.level) == (scene, level)))
             kept = [e.task for e in sampled if (e.scene, e.level) == (scene, level)]
             assert kept == [tasks[0], tasks[len(tasks) // 3], tasks[2 * len(tasks) // 3]]
-    assert len(select_episodes(benchmark(), _options(sample=100))) == 16  # fewer tasks: all
+    assert len(select_episodes(cached_benchmark(), _options(sample=100))) == 16  # fewer tasks: all
 
 
 def test_a_hung_in_process_policy_is_cut_at_its_time_limit_in_the_worker_pool(tmp_path,

@@ -18,7 +18,7 @@ from robofollow.eval.websocket_client import WebsocketPolicy
 from robofollow.eval.websocket_server import PolicyServer
 from robofollow.eval.wire import packb, unpackb
 from robofollow.sim import robot
-from tests.sim_helpers import benchmark, episode
+from tests.sim_helpers import benchmark, cached_benchmark, episode
 
 EPISODE = "scene2/L0/pickup_left_cube#r1"
 
@@ -185,7 +185,7 @@ def test_a_server_killed_mid_run_costs_its_episodes_not_the_run(tmp_path):
     options = EvalOptions(uri + "?timeout=1&retries=1", ("scene2",), ("L0",), 1, "normal",
                           "none", benchmark().spec.digest,
                           ("scene2/L0/pickup_left_cube", "scene2/L0/pickup_right_cube"))
-    summary = evaluate(benchmark(), tmp_path / "run", options, progress=False)
+    summary = evaluate(cached_benchmark(), tmp_path / "run", options, progress=False)
     records = {r["task"]: r for r in read_results(tmp_path / "run" / "episodes.jsonl")}
     assert summary["episodes"] == 2
     first, second = (records[f"scene2/L0/{name}"] for name in ("pickup_left_cube",

@@ -172,10 +172,10 @@ def test_a_policy_that_dies_or_exits_costs_its_episode_not_the_run(tmp_path, wor
 
 
 def test_in_process_a_systemexit_is_recorded_and_ctrl_c_still_stops(tmp_path, monkeypatch):
-    from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.compiled_cache import load
     from robofollow.eval.runner import EvalOptions, evaluate, read_results
 
-    compiled = compile_specs(SPECS)
+    compiled = load(SPECS)
     tasks = ("scene1/L0/pickup_yellow_block_2", "scene1/L0/pickup_yellow_block_1_right")
     options = EvalOptions("tests.test_faults_eval:make_faulty_without_exit", ("scene1",),
                           ("L0",), 1, "normal", "none", compiled.spec.digest, tasks,

@@ -48,13 +48,13 @@ def add_generate(commands) -> None:
 
 
 def cmd_generate(args) -> int:
-    from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.compiled_cache import load
     from robofollow.data.generate import generate
     from robofollow.data.jobs import select_tasks
     from robofollow.data.units import Options
 
     specs = specs_of(args)
-    compiled = compile_specs(specs)
+    compiled = load(specs)
     width, height = args.image_size
     tasks = select_tasks(compiled, [t for t in (args.tasks or "").split(",") if t.strip()])
     options = Options(args.format, args.episodes_per_task, tuple(tasks), width, height,

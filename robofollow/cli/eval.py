@@ -87,18 +87,17 @@ def add_eval(commands) -> None:
 
 
 def cmd_eval(args) -> int:
-    from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.compiled_cache import load
     from robofollow.eval.loading import with_privileged
     from robofollow.eval.policy_kind import is_server
     from robofollow.eval.report import write_report
     from robofollow.eval.runner import EvalOptions, evaluate, failures_text
     from robofollow.eval.tables import table_text
 
-    compiled = compile_specs(specs_of(args))
+    compiled = load(specs_of(args))
     scenes = _names(args.scenes, list(compiled.spec.scenes), "scene")
     levels = _names(args.levels, list(LEVELS), "level")
-    known_tasks = [t.id for t in compiled.splits.tasks]
-    tasks = _names(args.tasks, known_tasks, "task") if args.tasks else []
+    tasks = _names(args.tasks, list(compiled.task_ids), "task") if args.tasks else []
     if args.policy_timeout is not None and is_server(args.policy):
         raise RoboFollowError("--policy-timeout limits in-process policies; a server takes "
                               "its own: --policy URL?timeout=S&retries=N")

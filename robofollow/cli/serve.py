@@ -44,7 +44,7 @@ def add_serve(commands) -> None:
 def cmd_serve(args) -> int:
     import logging
 
-    from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.compiled_cache import load
     from robofollow.eval.serving import ServerLimits
     from robofollow.eval.tcp_server import TcpPolicyServer
     from robofollow.eval.websocket_server import PolicyServer
@@ -53,7 +53,7 @@ def cmd_serve(args) -> int:
                             else (PolicyServer, "ws"))
     limits = ServerLimits(args.max_message, args.idle_timeout, args.max_clients)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
-    server = server_class(compile_specs(specs_of(args)), args.policy, limits)
+    server = server_class(load(specs_of(args)), args.policy, limits)
 
     def listening(_) -> None:  # only now can a client connect
         print(f"serving {args.policy} on {scheme}://{args.host}:{args.port} (Ctrl-C stops; "

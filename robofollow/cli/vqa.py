@@ -51,7 +51,7 @@ def add_vqa(commands) -> None:
 
 
 def cmd_vqa(args) -> int:
-    from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.compiled_cache import load
     from robofollow.vqa.paper import LAYOUT, SCENE
     from robofollow.vqa.probe import write_probe
 
@@ -61,7 +61,7 @@ def cmd_vqa(args) -> int:
     out = Path(args.out)
     if out.is_dir() and any(out.iterdir()):
         raise RoboFollowError(f"{out} is not empty; choose a new folder")
-    compiled = compile_specs(specs_of(args))
+    compiled = load(specs_of(args))
     scene, layout = (SCENE, LAYOUT) if args.qa20 else (args.scene,
                                                        scene_layout(compiled, args.scene, args.layout))
     records = write_probe(compiled, scene, layout, out, args.count, args.seed, args.qa20,

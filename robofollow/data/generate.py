@@ -19,7 +19,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.episode import Benchmark
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
 from robofollow.data.jobs import DemoJob, demo_jobs
 from robofollow.data.units import Options, UnitRecorder, unit_path
@@ -78,7 +78,7 @@ def _manifest(out: Path) -> dict:
 
 # -- recording -----------------------------------------------------------------------------
 
-def _record_all(compiled: Compiled, options: Options, work: Path,
+def _record_all(compiled: Benchmark, options: Options, work: Path,
                 jobs: list[DemoJob], workers: int, progress: bool) -> list[dict]:
     todo = [job for job in jobs if not (unit_path(work, job) / "demo.json").is_file()]
     bar = tqdm(total=len(jobs), initial=len(jobs) - len(todo), desc="recording", unit="demo",
@@ -131,7 +131,7 @@ def _write(out: Path, options: Options, jobs: list[DemoJob], failed: list[dict],
     return GenerateResult(out, episodes, len(demos), recorded, discarded, failed)
 
 
-def generate(compiled: Compiled, out: Path, options: Options, workers: int = 1,
+def generate(compiled: Benchmark, out: Path, options: Options, workers: int = 1,
              resume: bool = False, progress: bool = True) -> GenerateResult:
     """Record (or finish recording) the demonstrations and write the dataset."""
     began = time.perf_counter()

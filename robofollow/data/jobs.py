@@ -13,8 +13,7 @@ import numpy as np
 from robofollow.errors import RoboFollowError
 
 if TYPE_CHECKING:  # the CLI reads this module's constants without loading the compiler
-    from robofollow.benchmark.episode import EpisodeSetup
-    from robofollow.benchmark.pipeline import Compiled
+    from robofollow.benchmark.episode import Benchmark, EpisodeSetup
     from robofollow.compiler.behaviour import Behaviour
 
 # Demonstration seeds live far above the test episodes' seeds (split seed bases are small and
@@ -65,7 +64,7 @@ def sampled_paraphrase(label: str, index: int, paraphrases: tuple[str, ...]) -> 
     return paraphrases[int(np.random.default_rng(entropy).integers(len(paraphrases)))]
 
 
-def select_tasks(compiled: Compiled, names: list[str] | None) -> list[str]:
+def select_tasks(compiled: Benchmark, names: list[str] | None) -> list[str]:
     """Training task labels, in spec order; `names` keeps only those (labels or scene ids)."""
     labels = [task.label for task in compiled.spec.tasks]
     if not names:
@@ -84,7 +83,7 @@ def select_tasks(compiled: Compiled, names: list[str] | None) -> list[str]:
     return [label for label in labels if label in wanted]
 
 
-def demo_jobs(compiled: Compiled, per_task: int, labels: list[str],
+def demo_jobs(compiled: Benchmark, per_task: int, labels: list[str],
               instructions: str = "sample") -> list[DemoJob]:
     """Every job, task by task in spec order, episode index ascending."""
     if instructions not in DEMO_INSTRUCTIONS:
@@ -93,7 +92,7 @@ def demo_jobs(compiled: Compiled, per_task: int, labels: list[str],
     jobs = []
     for label in labels:
         task = tasks[label]
-        behaviour = compiled.training[label]
+        behaviour = compiled.candidates(task.scene)[label]
         for index in range(per_task):
             chosen = (task.paraphrases if instructions == "all"
                       else (sampled_paraphrase(label, index, task.paraphrases),))

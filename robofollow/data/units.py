@@ -19,7 +19,7 @@ from pathlib import Path
 import h5py
 import numpy as np
 
-from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.episode import Benchmark
 from robofollow.data.jobs import MAX_ATTEMPTS, DemoJob
 from robofollow.data.sinks import ArraySink, FrameSink, VideoSink
 from robofollow.errors import RoboFollowError
@@ -69,7 +69,7 @@ class UnitRecorder:
     """Records jobs into units under `work`; one per worker process (it keeps the current
     layout's simulation and renderer between jobs)."""
 
-    def __init__(self, compiled: Compiled, options: Options, work: Path):
+    def __init__(self, compiled: Benchmark, options: Options, work: Path):
         self.compiled, self.options, self.work = compiled, options, work
         self.runner = ExpertRunner(options.width, options.height)
 

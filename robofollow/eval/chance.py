@@ -13,15 +13,14 @@ followed_intent   the Intent earned by perfectly following the instruction the p
 
 from __future__ import annotations
 
-from robofollow.benchmark.episode import Episode
-from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.episode import Benchmark, Episode
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
 from robofollow.eval.reference import available_behaviours, understood
 from robofollow.oracle.chance import guessing, intent_if_performed
 
 
-def references(compiled: Compiled, episode: Episode, instruction: str) -> dict:
+def references(compiled: Benchmark, episode: Episode, instruction: str) -> dict:
     scene = compiled.spec.scenes[episode.scene]
     world = World(scene, episode.layout)
     asked = episode.behaviour

@@ -13,8 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from robofollow.benchmark.episode import Episode
-from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.episode import Benchmark, Episode
 from robofollow.eval.deadline import PolicyTimeout, check_deadline, deadline
 from robofollow.eval.policy import BadActionError, Policy, Privileged, validate_actions
 from robofollow.oracle.results import EpisodeScore
@@ -61,7 +60,7 @@ class PolicyRollout(Rollout):
     """A policy's episode in progress: the policy's calls so far and the executed actions whose
     targets were past a joint limit; each chunk runs at most CHUNK actions."""
 
-    def __init__(self, compiled: Compiled, stage: Stage, episode: Episode, render: bool,
+    def __init__(self, compiled: Benchmark, stage: Stage, episode: Episode, render: bool,
                  budget: int = MAX_STEPS, on_frame=None):
         super().__init__(compiled, stage, episode, render, budget, on_frame)
         self.queries = self.clipped = 0
@@ -79,7 +78,7 @@ class PolicyRollout(Rollout):
                           time.perf_counter() - began)
 
 
-def run_episode(compiled: Compiled, stage: Stage, episode: Episode, policy: Policy | None,
+def run_episode(compiled: Benchmark, stage: Stage, episode: Episode, policy: Policy | None,
                 instruction: str | None = None, budget: int = MAX_STEPS,
                 on_frame=None, timeout: float | None = None,
                 failed: str | None = None) -> EpisodeRun:

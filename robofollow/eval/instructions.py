@@ -6,8 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robofollow.benchmark.episode import Episode
-from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.episode import Benchmark, Episode
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.grounding import ground
 from robofollow.compiler.world import World
@@ -15,7 +14,7 @@ from robofollow.errors import RoboFollowError
 from robofollow.eval.modes import INSTRUCTION_MODES
 
 
-def given_instruction(compiled: Compiled, episode: Episode, mode: str) -> str:
+def given_instruction(compiled: Benchmark, episode: Episode, mode: str) -> str:
     if mode == "normal":
         return episode.instruction
     if mode == "empty":
@@ -34,7 +33,7 @@ def given_instruction(compiled: Compiled, episode: Episode, mode: str) -> str:
 _GROUNDINGS: dict[tuple[str, str, str], tuple[tuple[str, Behaviour], ...]] = {}
 
 
-def _groundings(compiled: Compiled, scene_id: str, layout: str
+def _groundings(compiled: Benchmark, scene_id: str, layout: str
                 ) -> tuple[tuple[str, Behaviour], ...]:
     """Every training paraphrase of the scene that grounds on the layout (nominal poses), with
     the behaviour it asks for there; computed once per layout."""
@@ -44,7 +43,7 @@ def _groundings(compiled: Compiled, scene_id: str, layout: str
     return _GROUNDINGS[key]
 
 
-def _ground_all(compiled: Compiled, scene_id: str, layout: str
+def _ground_all(compiled: Benchmark, scene_id: str, layout: str
                 ) -> tuple[tuple[str, Behaviour], ...]:
     scene = compiled.spec.scenes[scene_id]
     world = World(scene, layout)

@@ -35,9 +35,8 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from robofollow.benchmark.episode import Episode
-from robofollow.benchmark.pipeline import Compiled
-from robofollow.benchmark.rounds import all_episodes
+from robofollow.benchmark.episode import Benchmark, Episode
+from robofollow.compiled_cache import Episodes
 from robofollow.errors import RoboFollowError, error_text
 from robofollow.eval.chance import references
 from robofollow.eval.episode import EpisodeRun, run_episode
@@ -89,10 +88,17 @@ class EvalOptions:
                     tasks=list(self.tasks))
 
 
-def select_episodes(compiled: Compiled, options: EvalOptions) -> list[Episode]:
-    chosen = [e for e in all_episodes(compiled) if e.scene in options.scenes
-              and e.level in options.levels and e.round <= options.rounds
-              and (not options.tasks or e.task in options.tasks)]
+def select_episodes(benchmark: Episodes, options: EvalOptions) -> list[Episode]:
+    """The options' episodes, in the compiled order (only those are parsed)."""
+
+    def chosen_id(episode_id: str) -> bool:
+        task, _, round_index = episode_id.partition("#r")
+        scene, level, _ = task.split("/", 2)
+        return (scene in options.scenes and level in options.levels
+                and int(round_index) <= options.rounds
+                and (not options.tasks or task in options.tasks))
+
+    chosen = benchmark.episodes(chosen_id)
     if options.sample:
         kept = set()
         for tasks in _tasks_by_cell(chosen).values():
@@ -139,7 +145,8 @@ def result_record(episode: Episode, instruction: str, run: EpisodeRun) -> dict:
                    "initial_state": _digest(start)}}
 
 
-def episode_record(compiled: Compiled, episode: Episode, instruction: str, run: EpisodeRun) -> dict:
+def episode_record(compiled: Benchmark, episode: Episode, instruction: str,
+                   run: EpisodeRun) -> dict:
     """The episode's full record: `result_record` with its chance and followed references."""
     return dict(result_record(episode, instruction, run),
                 **references(compiled, episode, instruction))
@@ -148,7 +155,7 @@ def episode_record(compiled: Compiled, episode: Episode, instruction: str, run: 
 class Evaluator:
     """Evaluates episodes one after another (one per worker process)."""
 
-    def __init__(self, compiled: Compiled, options: EvalOptions, out: Path):
+    def __init__(self, compiled: Benchmark, options: EvalOptions, out: Path):
         self.compiled, self.options, self.out = compiled, options, out
         self.policy = build_policy(options.policy)
         self.stage = Stage()
@@ -197,7 +204,7 @@ class _LostEpisodes:
     """Records, in this process, the episodes whose policy process died: each is scored as it
     stands at its start, with the reason as its policy failure."""
 
-    def __init__(self, compiled: Compiled, options: EvalOptions):
+    def __init__(self, compiled: Benchmark, options: EvalOptions):
         self.compiled, self.options = compiled, options
         self.stage: Stage | None = None
 
@@ -261,7 +268,7 @@ def failures_text(result: dict) -> str | None:
     return "\n".join(lines)
 
 
-def evaluate(compiled: Compiled, out: Path, options: EvalOptions, workers: int = 1,
+def evaluate(compiled: Episodes, out: Path, options: EvalOptions, workers: int = 1,
              resume: bool = False, progress: bool = True, executor: str = "process",
              drop_corrupt: bool = False, isolate: bool | None = None) -> dict:
     """Run (or finish) the evaluation; returns the summary (also written to summary.json).

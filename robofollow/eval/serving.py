@@ -23,7 +23,7 @@ from importlib.metadata import version
 
 import numpy as np
 
-from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.episode import Benchmark
 from robofollow.errors import RoboFollowError
 from robofollow.eval.limits import IDLE_TIMEOUT_S, MAX_CLIENTS, MAX_MESSAGE_BYTES
 from robofollow.eval.loading import load_policy
@@ -106,7 +106,7 @@ class ServedPolicy:
     """One policy instance behind a server, with the observation checks and episode
     boundaries of the serving protocol."""
 
-    def __init__(self, compiled: Compiled, policy_spec: str):
+    def __init__(self, compiled: Benchmark, policy_spec: str):
         self.compiled, self.policy, self.spec = compiled, load_policy(policy_spec), policy_spec
         self.stage = Stage()
         self.start: tuple | None = None
@@ -203,7 +203,7 @@ class PolicyPool:
     before the server listens), more as connections need them, at most `size`; a
     connection's instance is reset and kept for later connections."""
 
-    def __init__(self, compiled: Compiled, policy_spec: str, size: int = MAX_CLIENTS):
+    def __init__(self, compiled: Benchmark, policy_spec: str, size: int = MAX_CLIENTS):
         self.compiled, self.spec, self.size = compiled, policy_spec, size
         self.idle = [ServedPolicy(compiled, policy_spec)]
         self.metadata = self.idle[0].metadata  # the same for every instance

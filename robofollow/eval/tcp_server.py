@@ -15,7 +15,7 @@ import socket
 import threading
 import time
 
-from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.episode import Benchmark
 from robofollow.eval.limits import DEFAULT_HOST
 from robofollow.eval.policy import server_text
 from robofollow.eval.serving import (
@@ -117,7 +117,7 @@ class _Session:
 class TcpPolicyServer:
     """Serves one Python policy over upstream's TCP protocol, each connection in a thread."""
 
-    def __init__(self, compiled: Compiled, policy_spec: str,
+    def __init__(self, compiled: Benchmark, policy_spec: str,
                  limits: ServerLimits | None = None):
         self.limits = limits or ServerLimits()
         self.pool = PolicyPool(compiled, policy_spec, self.limits.max_clients)

@@ -11,7 +11,7 @@ from pathlib import Path
 from tqdm import tqdm
 
 from robofollow.benchmark.episode import Episode
-from robofollow.benchmark.pipeline import compile_specs
+from robofollow.compiled_cache import load
 from robofollow.workers import results
 
 
@@ -25,7 +25,7 @@ class _Verifier:
     """One worker process: the compiled benchmark, then episodes one at a time."""
 
     def __init__(self, specs: str):
-        self.compiled = compile_specs(Path(specs))
+        self.compiled = load(Path(specs))
 
     def __call__(self, episode: Episode) -> dict:
         from robofollow.sim.rollout import run_expert
@@ -49,7 +49,7 @@ def _lost(episode: Episode, what: str) -> dict:
 def run_expert_episodes(specs: Path, episodes: list[Episode], workers: int,
                         quiet: bool = False) -> list[dict]:
     """Each episode's expert result (`full`, `reasons`, scores, `scene`, `level`), sorted by
-    episode id; `workers` supervised processes, each compiling `specs` once."""
+    episode id; `workers` supervised processes, each reading `specs` compiled from the cache (compiled_cache)."""
     found = tqdm(results(partial(_Verifier, str(specs)), episodes, workers, lost=_lost,
                          isolate=True),
                  total=len(episodes), desc="expert episodes", unit="ep", mininterval=10,

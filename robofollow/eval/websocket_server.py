@@ -17,7 +17,7 @@ from websockets.exceptions import ConnectionClosed
 from websockets.frames import CloseCode
 from websockets.sync.server import serve
 
-from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.episode import Benchmark
 from robofollow.eval.limits import DEFAULT_HOST
 from robofollow.eval.serving import (
     PolicyPool,
@@ -41,7 +41,7 @@ class PolicyServer:
     """Serves one Python policy; each connection in its own thread with its own policy
     instance, at most `limits.max_clients` at once."""
 
-    def __init__(self, compiled: Compiled, policy_spec: str,
+    def __init__(self, compiled: Benchmark, policy_spec: str,
                  limits: ServerLimits | None = None):
         self.limits = limits or ServerLimits()
         self.pool = PolicyPool(compiled, policy_spec, self.limits.max_clients)

@@ -64,7 +64,7 @@ class RoboFollowBenchmark(StepBenchmark):
                  width: int = 320, height: int = 240) -> None:
         super().__init__()
         # Imported here, after configure_render: MuJoCo binds its GL backend when imported.
-        from robofollow.benchmark.pipeline import compile_specs
+        from robofollow.compiled_cache import load
         from robofollow.compiler.spec import LEVELS
         from robofollow.eval.modes import INSTRUCTION_MODES
         from robofollow.eval.runner import EvalOptions, select_episodes
@@ -79,7 +79,7 @@ class RoboFollowBenchmark(StepBenchmark):
         if self.budget < 1:
             raise ValueError(f"budget must be at least 1 control step, got {budget}")
         self.instruction_mode = instruction_mode
-        compiled = self.compiled = compile_specs(Path(specs) if specs else builtin_specs())
+        compiled = self.compiled = load(Path(specs) if specs else builtin_specs())
         self.stage = Stage(width, height)  # the current layout's simulation and cameras
         scenes, levels = _names(scenes), _names(levels)
         for kind, given, known in (("scene", scenes, list(compiled.spec.scenes)),

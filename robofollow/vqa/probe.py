@@ -21,7 +21,7 @@ import numpy as np
 from PIL import Image
 from tqdm import tqdm
 
-from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.episode import Benchmark
 from robofollow.errors import RoboFollowError
 from robofollow.files import write_json, write_jsonl
 from robofollow.sim.stage import Stage
@@ -32,7 +32,7 @@ PER_IMAGE = 5
 CAMERA = "cam_high"
 
 
-def write_probe(compiled: Compiled, scene_id: str, layout: str, out: Path, count: int,
+def write_probe(compiled: Benchmark, scene_id: str, layout: str, out: Path, count: int,
                 seed: int, qa20: bool = False, progress: bool = True) -> list[dict]:
     """Write `count` questions and their images to `out` (with `qa20`: the paper's 20)."""
     scene = compiled.spec.scenes[scene_id]
