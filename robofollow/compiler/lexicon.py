@@ -305,12 +305,41 @@ def tokenize(text: str) -> list[WordToken]:
     """Split an instruction into terminal tokens, each with its 1-based column in `text`.
     Raises UnknownWordError, or UnsupportedConstructError for a known English word that names
     something the language does not cover."""
-    tokens: list[WordToken] = []
+    pieces = _pieces(text)
+    return [WordToken(terminal, value, text[begin:end], begin + 1, end + 1)
+            for (_, value, begin, end), terminal in zip(pieces, _terminals(pieces))
+            if terminal is not None]
+
+
+def terms(text: str) -> list[tuple[str, str]]:
+    """(terminal, value) of each token `tokenize` gives, without placing or building the
+    tokens (the wording rules ask this of thousands of sentences)."""
+    found = [word for piece in _WORD_OR_MARK.findall(text) for word in _terms_of(piece)]
+    if any(word is None for word in found):
+        tokenize(text)  # raises the error, located
+    return [(terminal, word[1]) for word, terminal in zip(found, _terminals(found))
+            if terminal is not None]
+
+
+@lru_cache(maxsize=8192)
+def _terms_of(piece: str) -> tuple[tuple[str, str] | None, ...]:
+    """A piece's (terminal, value) pairs; (None,) for a piece with an unknown word."""
+    mark = _MARKS.get(piece)
+    if mark is not None:
+        return ((mark, piece),)
+    words, unknown = _analyse(piece)
+    return (None,) if unknown is not None else tuple((t, v) for t, v, _, _ in words)
+
+
+def _pieces(text: str) -> list[tuple[str, str, int, int]]:
+    """(terminal, value, begin, end) of each word and mark of `text` (0-based offsets, before
+    the two-token decisions of _terminals); raises as `tokenize` says."""
+    pieces = []
     for match in _WORD_OR_MARK.finditer(text):
         piece, start = match.group(), match.start()
         mark = _MARKS.get(piece)
         if mark is not None:
-            tokens.append(WordToken(mark, piece, piece, start + 1, start + 2))
+            pieces.append((mark, piece, start, start + 1))
             continue
         words, unknown = _analyse(piece)
         if unknown is not None:
@@ -324,31 +353,37 @@ def tokenize(text: str) -> list[WordToken]:
             raise UnknownWordError(f"unknown word {word!r}", text=text, column=start + offset + 1,
                                    length=max(len(word), 1),
                                    suggestions=tuple(suggestions(word.lower())))
-        for terminal, value, offset, length in words:
-            begin = start + offset
-            tokens.append(WordToken(terminal, value, text[begin:begin + length], begin + 1,
-                                    begin + length + 1))
-    while tokens and tokens[-1].type == "PERIOD":  # final '.', '!' or '?'
-        tokens.pop()
-    if tokens and tokens[-1].type == "PLEASE":  # '..., please.' closes the instruction
-        tokens[-1].type = "PLEASE_END"
-    return _disambiguate(tokens)
+        pieces += [(terminal, value, start + offset, start + offset + length)
+                   for terminal, value, offset, length in words]
+    return pieces
 
 
-def _disambiguate(tokens: list[WordToken]) -> list[WordToken]:
-    """Two-token decisions the LALR(1) parser cannot make: 'and' before a modifier is
-    AND_MOD; a separator right before 'otherwise' or 'if' is dropped."""
-    result: list[WordToken] = []
-    last = len(tokens) - 1
-    for index, token in enumerate(tokens):
-        following = tokens[index + 1].type if index < last else None
-        if token.type in _SEPARATORS and following in _ABSORBING and result:
+def _terminals(pieces: list[tuple]) -> list[str | None]:
+    """Each piece's terminal (its first item) once the decisions the LALR(1) parser cannot make are made (None:
+    dropped): a final '.', '!' or '?' is dropped and '..., please.' closes the instruction
+    (PLEASE_END); then, by the next token, 'and' before a modifier is AND_MOD and before a
+    noun phrase AND_NP, 'not' before a route's gerund NOT_GOING, and a separator right before
+    'otherwise' or 'if' is dropped."""
+    types = [piece[0] for piece in pieces]
+    end = len(types)
+    while end and types[end - 1] == "PERIOD":
+        end -= 1
+    if end and types[end - 1] == "PLEASE":
+        types[end - 1] = "PLEASE_END"
+    result: list[str | None] = [None] * len(types)
+    kept = False
+    for index in range(end):
+        terminal = types[index]
+        following = types[index + 1] if index + 1 < end else None
+        if terminal in _SEPARATORS and following in _ABSORBING and kept:
             continue
-        if token.type == "AND" and following in _MODIFIER_STARTS:
-            token.type = "AND_MOD"
-        elif token.type == "AND" and following in _NOUN_PHRASE_STARTS:
-            token.type = "AND_NP"
-        elif token.type == "NOT" and following in _ROUTE_GERUNDS:  # 'not passing over X'
-            token.type = "NOT_GOING"
-        result.append(token)
+        if terminal == "AND" and following in _MODIFIER_STARTS:
+            terminal = "AND_MOD"
+        elif terminal == "AND" and following in _NOUN_PHRASE_STARTS:
+            terminal = "AND_NP"
+        elif terminal == "NOT" and following in _ROUTE_GERUNDS:  # 'not passing over X'
+            terminal = "NOT_GOING"
+        result[index] = terminal
+        kept = True
     return result
+

@@ -14,7 +14,7 @@ from collections.abc import Iterator
 
 from robofollow.compiler import lf
 from robofollow.compiler.grounding import Grounder, GroundingError
-from robofollow.compiler.lexicon import tokenize
+from robofollow.compiler.lexicon import terms
 from robofollow.compiler.wording_rules import vacuous_comparisons
 
 _PUNCTUATION = frozenset({"COMMA", "SEMICOLON", "PERIOD"})
@@ -28,7 +28,7 @@ _FACINGS = ("front", "back", "left", "right")
 
 def concepts(text: str) -> set[tuple[str, str]]:
     """The words of an instruction as the lexicon knows them (synonyms collapsed)."""
-    return {(t.type, t.value) for t in tokenize(text) if t.type not in _PUNCTUATION}
+    return {(terminal, value) for terminal, value in terms(text) if terminal not in _PUNCTUATION}
 
 
 class Describer:
