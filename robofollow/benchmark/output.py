@@ -23,9 +23,10 @@ from pathlib import Path
 from robofollow.benchmark.pipeline import Compiled
 from robofollow.benchmark.rounds import episode_lines
 from robofollow.benchmark.summary import changes, summary
+from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.goals import goal_graph, graph_to_dict
 from robofollow.compiler.plans import plan
-from robofollow.compiler.spec import LEVELS
+from robofollow.compiler.spec import LEVELS, Scene
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
 from robofollow.files import json_line, json_lines
@@ -209,7 +210,7 @@ def _write_files(compiled: Compiled, out: Path, changed: str) -> None:
     (out / "episodes").mkdir()
     (out / "tasks").mkdir()
     for scene in compiled.spec.scenes:
-        worlds: dict[str, World] = {}  # by layout
+        goals_and_plans = _GoalsAndPlans(compiled.spec.scenes[scene])
         for level in LEVELS:
             tasks = compiled.splits.of(scene, level)
             with open(out / "episodes" / f"{scene}_{level}.jsonl", "w", encoding="utf-8") as f:
@@ -217,16 +218,33 @@ def _write_files(compiled: Compiled, out: Path, changed: str) -> None:
                     f.writelines(line for _, line in episode_lines(compiled, task))
             with open(out / "tasks" / f"{scene}_{level}.jsonl", "w", encoding="utf-8") as f:
                 for task in tasks:
-                    if task.layout not in worlds:
-                        worlds[task.layout] = World(compiled.spec.scenes[scene], task.layout)
-                    world = worlds[task.layout]
+                    goal, points = goals_and_plans.of(task.behaviour, task.layout)
                     f.write(_line({"task": task.id, "origin": task.origin,
                                    "wording": task.wording, "layout": task.layout,
-                                   "instruction": task.instruction,
-                                   "goal": graph_to_dict(goal_graph(task.behaviour)),
-                                   "plan": plan(task.behaviour, world).model_dump(
-                                       mode="json")["points"]}))
+                                   "instruction": task.instruction, "goal": goal,
+                                   "plan": points}))
     with open(out / "rejected.jsonl", "w", encoding="utf-8") as f:
         f.writelines(_line(r.model_dump(mode="json")) for r in compiled.splits.rejected)
     (out / "audit.json").write_text(compiled.audit_json, encoding="utf-8")
     (out / "summary.txt").write_text(summary(compiled, changed), encoding="utf-8")
+
+
+class _GoalsAndPlans:
+    """A scene's goal DAGs and expert plans as the task files hold them, each made once (a
+    reworded task asks for its origin's behaviour on its origin's layout)."""
+
+    def __init__(self, scene: Scene):
+        self.scene = scene
+        self.worlds: dict[str, World] = {}
+        self.made: dict[tuple[str, str], tuple[dict, list]] = {}
+
+    def of(self, behaviour: Behaviour, layout: str) -> tuple[dict, list]:
+        key = behaviour.model_dump_json(), layout
+        if key not in self.made:
+            if layout not in self.worlds:
+                self.worlds[layout] = World(self.scene, layout)
+            self.made[key] = (graph_to_dict(goal_graph(behaviour)),
+                              plan(behaviour, self.worlds[layout]).model_dump(
+                                  mode="json")["points"])
+        return self.made[key]
+

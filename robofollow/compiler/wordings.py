@@ -42,6 +42,7 @@ class Describer:
         self.constructs = constructs
         self._simple: dict[str, lf.Ref | None] = {}
         self._descriptions: dict[str, list[lf.Ref]] = {}
+        self._conditions: list[lf.Condition] | None = None
 
     def unique(self, ref: lf.Ref, body: str) -> bool:
         try:
@@ -97,6 +98,36 @@ class Describer:
                 for noun in nouns for constraints in options)  # distinct by construction
         return [ref for ref in refs
                 if self.unique(ref, body) and not vacuous_comparisons(ref, self.grounder)]
+
+    def conditions(self) -> list[lf.Condition]:
+        """The observable conditions of the world, each as it is and negated (memoised):
+        something on (in) each body the simplest description picks out, and each movable
+        body left or right of another."""
+        if self._conditions is None:
+            world = self.world
+            found: list[lf.Condition] = []
+            for body in world.bodies:
+                landmark = self.simple(body)
+                if landmark is None:
+                    continue
+                relation = "in" if world.bodies[body].kind == "bowl" else "on"
+                if world.bodies[body].kind != "label":
+                    found.append(lf.Exists(ref=lf.Ref(noun="object", constraints=(
+                        lf.Related(relation=relation, landmark=landmark),))))
+            movable = [b for b in world.movable if self.simple(b) is not None]
+            for a in movable:
+                for b in movable:
+                    if a != b:
+                        for relation in ("left_of", "right_of"):
+                            found.append(lf.Holds(subject=self.simple(a), property=lf.Related(
+                                relation=relation, landmark=self.simple(b))))
+            self._conditions = [
+                condition.model_copy(update={"negated": negated})
+                if isinstance(condition, lf.Exists) else
+                condition.model_copy(update={"property": condition.property.model_copy(
+                    update={"negated": negated})})
+                for condition in found for negated in (False, True)]
+        return self._conditions
 
     def _meets(self, body: str, constraints: tuple) -> bool:
         """Whether `body` meets the plain constraints (those of a description that picks it
@@ -197,32 +228,9 @@ def conditions(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instru
     """Other observable conditions (and their negations) over the same branches."""
     if not isinstance(form, lf.Conditional):
         return
-    world = describer.world
-    found: list[lf.Condition] = []
-    for body in world.bodies:
-        landmark = describer.simple(body)
-        if landmark is None:
-            continue
-        relation = "in" if world.bodies[body].kind == "bowl" else "on"
-        if world.bodies[body].kind != "label":
-            found.append(lf.Exists(ref=lf.Ref(noun="object", constraints=(
-                lf.Related(relation=relation, landmark=landmark),))))
-    movable = [b for b in world.movable if describer.simple(b) is not None]
-    for a in movable:
-        for b in movable:
-            if a != b:
-                for relation in ("left_of", "right_of"):
-                    found.append(lf.Holds(subject=describer.simple(a), property=lf.Related(
-                        relation=relation, landmark=describer.simple(b))))
-    for condition in found:
-        for negated in (False, True):
-            if isinstance(condition, lf.Exists):
-                variant = condition.model_copy(update={"negated": negated})
-            else:
-                variant = condition.model_copy(update={"property": condition.property.model_copy(
-                    update={"negated": negated})})
-            if variant != form.condition:
-                yield form.model_copy(update={"condition": variant})
+    for variant in describer.conditions():
+        if variant != form.condition:
+            yield form.model_copy(update={"condition": variant})
 
 
 def branches(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruction]:
