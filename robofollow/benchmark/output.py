@@ -247,4 +247,3 @@ class _GoalsAndPlans:
                               plan(behaviour, self.worlds[layout]).model_dump(
                                   mode="json")["points"])
         return self.made[key]
-

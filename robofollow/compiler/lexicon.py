@@ -280,7 +280,11 @@ _Words = tuple[tuple[str, str, int, int], ...]  # (terminal, value, offset, leng
 
 @lru_cache(maxsize=8192)
 def _analyse(piece: str) -> tuple[_Words, tuple[str, int] | None]:
-    """One word-like piece -> its tokens, or the first unknown part as (word, offset)."""
+    """One piece (a word or a mark) -> its tokens, or the first unknown part as (word,
+    offset)."""
+    mark = _MARKS.get(piece)
+    if mark is not None:
+        return ((mark, piece, 0, 1),), None
     lowered = piece.lower().replace("’", "'")
     if len(lowered) != len(piece):  # case folding changed the length: no vocabulary word
         lowered = piece
@@ -314,21 +318,12 @@ def tokenize(text: str) -> list[WordToken]:
 def terms(text: str) -> list[tuple[str, str]]:
     """(terminal, value) of each token `tokenize` gives, without placing or building the
     tokens (the wording rules ask this of thousands of sentences)."""
-    found = [word for piece in _WORD_OR_MARK.findall(text) for word in _terms_of(piece)]
-    if any(word is None for word in found):
+    analysed = [_analyse(piece) for piece in _WORD_OR_MARK.findall(text)]
+    if any(unknown is not None for _, unknown in analysed):
         tokenize(text)  # raises the error, located
+    found = [word for words, _ in analysed for word in words]
     return [(terminal, word[1]) for word, terminal in zip(found, _terminals(found))
             if terminal is not None]
-
-
-@lru_cache(maxsize=8192)
-def _terms_of(piece: str) -> tuple[tuple[str, str] | None, ...]:
-    """A piece's (terminal, value) pairs; (None,) for a piece with an unknown word."""
-    mark = _MARKS.get(piece)
-    if mark is not None:
-        return ((mark, piece),)
-    words, unknown = _analyse(piece)
-    return (None,) if unknown is not None else tuple((t, v) for t, v, _, _ in words)
 
 
 def _pieces(text: str) -> list[tuple[str, str, int, int]]:
@@ -337,10 +332,6 @@ def _pieces(text: str) -> list[tuple[str, str, int, int]]:
     pieces = []
     for match in _WORD_OR_MARK.finditer(text):
         piece, start = match.group(), match.start()
-        mark = _MARKS.get(piece)
-        if mark is not None:
-            pieces.append((mark, piece, start, start + 1))
-            continue
         words, unknown = _analyse(piece)
         if unknown is not None:
             word, offset = unknown
@@ -359,8 +350,8 @@ def _pieces(text: str) -> list[tuple[str, str, int, int]]:
 
 
 def _terminals(pieces: list[tuple]) -> list[str | None]:
-    """Each piece's terminal (its first item) once the decisions the LALR(1) parser cannot make are made (None:
-    dropped): a final '.', '!' or '?' is dropped and '..., please.' closes the instruction
+    """Each piece's terminal (its first item) once the decisions the LALR(1) parser cannot
+    make are made (None: dropped): a final '.', '!' or '?' is dropped and '..., please.' closes the instruction
     (PLEASE_END); then, by the next token, 'and' before a modifier is AND_MOD and before a
     noun phrase AND_NP, 'not' before a route's gerund NOT_GOING, and a separator right before
     'otherwise' or 'if' is dropped."""
@@ -386,4 +377,3 @@ def _terminals(pieces: list[tuple]) -> list[str | None]:
         result[index] = terminal
         kept = True
     return result
-

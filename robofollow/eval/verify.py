@@ -49,7 +49,8 @@ def _lost(episode: Episode, what: str) -> dict:
 def run_expert_episodes(specs: Path, episodes: list[Episode], workers: int,
                         quiet: bool = False) -> list[dict]:
     """Each episode's expert result (`full`, `reasons`, scores, `scene`, `level`), sorted by
-    episode id; `workers` supervised processes, each reading `specs` compiled from the cache (compiled_cache)."""
+    episode id; `workers` supervised processes, each reading `specs` compiled from the cache
+    (compiled_cache)."""
     found = tqdm(results(partial(_Verifier, str(specs)), episodes, workers, lost=_lost,
                          isolate=True),
                  total=len(episodes), desc="expert episodes", unit="ep", mininterval=10,
