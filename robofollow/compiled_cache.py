@@ -78,7 +78,7 @@ class Episodes:
     def record(self, episode_id: str) -> Episode:
         """The episode with this id (`<scene>/<level>/<task>#r<round>`)."""
         if episode_id not in self.index:
-            raise _unknown(episode_id, self.ids)
+            raise _unknown(episode_id, self.task_ids)
         return Episode.model_validate_json(self.lines[self.index[episode_id]])
 
     @cached_property
@@ -106,10 +106,10 @@ class Episodes:
         return chosen
 
 
-def _unknown(episode_id: str, ids: tuple[str, ...]) -> Exception:
+def _unknown(episode_id: str, task_ids: tuple[str, ...]) -> Exception:
     from robofollow.benchmark.rounds import unknown_episode  # (imports the compiler: only on error)
 
-    return unknown_episode(episode_id, list(dict.fromkeys(e.partition("#")[0] for e in ids)))
+    return unknown_episode(episode_id, list(task_ids))
 
 
 def cache_dir() -> Path | None:
