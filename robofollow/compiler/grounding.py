@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from pydantic import BaseModel
+
 from robofollow.compiler import lf, notation
 from robofollow.compiler.behaviour import Behaviour, Step
 from robofollow.compiler.world import (
@@ -57,11 +59,14 @@ def _describe(ref: lf.Ref) -> str:
 class Grounder:
     """Grounds logical forms in one world."""
 
-    def __init__(self, world: World):
+    def __init__(self, world: World, still: dict | None = None):
+        """`still`: the memo of descriptions that read no position, shared by the grounders
+        of one layout's jittered worlds."""
         self.world = world
         # keyed by object identity (cheap, unlike hashing nested models); the entry keeps its
         # description alive so that an id is never reused while cached
         self._referents: dict[int, tuple[lf.Ref, tuple[str, ...]]] = {}
+        self._still: dict[int, tuple[lf.Ref, tuple[str, ...]]] = {} if still is None else still
         self._domains: dict[str, tuple[str, ...]] = {}
 
     # ---------------------------------------------------------------- referents
@@ -77,7 +82,12 @@ class Grounder:
         """Every body the description fits (memoised: a world does not change)."""
         cached = self._referents.get(id(ref))
         if cached is None or cached[0] is not ref:
-            cached = self._referents[id(ref)] = (ref, tuple(self._find(ref)))
+            cached = self._still.get(id(ref))
+            if cached is None or cached[0] is not ref:
+                cached = (ref, tuple(self._find(ref)))
+                if all(isinstance(c, _STILL) for c in ref.constraints):
+                    self._still[id(ref)] = cached
+            self._referents[id(ref)] = cached
         return list(cached[1])
 
     def _find(self, ref: lf.Ref) -> list[str]:
@@ -275,18 +285,63 @@ class Unstable:
     objects: tuple[tuple[str, str | None], ...] = ()  # the (source, target) it picks instead
 
 
+_STILL = (lf.ColorIs, lf.NotKind, lf.SizeIs)  # constraints that read no position
+
+
+def position_reads(node, grounder: Grounder) -> set[str]:
+    """The bodies whose positions can change what `node` (a form or a part of one) picks out:
+    the candidates and landmarks of each description that relates or compares positions (every
+    body for a condition that does)."""
+    found: set[str] = set()
+    if isinstance(node, tuple):
+        for item in node:
+            found |= position_reads(item, grounder)
+    elif isinstance(node, lf.Holds) and not isinstance(node.property, _STILL):
+        found |= set(grounder.world.bodies)
+    elif isinstance(node, BaseModel):
+        if isinstance(node, lf.Ref) and not all(isinstance(c, _STILL) for c in node.constraints):
+            found.update(_eligible(node, grounder))
+            for constraint in node.constraints:
+                for landmark in _landmarks(constraint):
+                    found.update(_eligible(landmark, grounder))
+        for name in type(node).model_fields:
+            found |= position_reads(getattr(node, name), grounder)
+    return found
+
+
+def _eligible(ref: lf.Ref, grounder: Grounder) -> list[str]:
+    """The bodies a description could pick wherever bodies stand: its noun's, less those its
+    colour and kind words rule out."""
+    fixed = [c for c in ref.constraints if isinstance(c, (lf.ColorIs, lf.NotKind))]
+    return [b for b in grounder.domain(ref.noun) if all(grounder.satisfies(b, c) for c in fixed)]
+
+
+def _landmarks(constraint: lf.Constraint) -> tuple[lf.Ref, ...]:
+    if isinstance(constraint, lf.Between):
+        return constraint.landmarks
+    landmark = getattr(constraint, "landmark", None)
+    return () if landmark is None else (landmark,)
+
+
 def first_unstable(form: lf.Instruction, grounders: list[Grounder], expected: Behaviour,
                    first_case: int = 0) -> Unstable | None:
     """The first of the worlds (numbered from `first_case`) where `form` fails to ground or
-    picks other objects than `expected`; None when it means the same in all of them."""
+    picks other objects than `expected`; None when it means the same in all of them. Worlds
+    where no body the form reads has moved give one verdict, asked once."""
     objects = tuple((s.source, s.target) for s in expected.steps)
+    reads = position_reads(form, grounders[0]) if grounders else set()
+    settled = False  # a world where nothing the form reads moved was found stable
     for index, grounder in enumerate(grounders, start=first_case):
+        untouched = grounder.world.shifted.isdisjoint(reads)
+        if untouched and settled:
+            continue
         try:
             picked = grounder.objects(form)
         except GroundingError as error:
             return Unstable(index, grounder.world, error)
         if picked != objects:
             return Unstable(index, grounder.world, None, picked)
+        settled = settled or untouched
     return None
 
 

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from functools import cache
+from functools import cache, wraps
 from typing import TYPE_CHECKING
 
 from robofollow.compiler import lf
@@ -137,12 +137,27 @@ def _sentence(text: str) -> str:
     return text + "."
 
 
+def _by_node(method):
+    """Memoise a Realizer method on its node's identity and its other arguments, for the
+    realizer's life (the split generator speaks thousands of forms that share their parts;
+    the entry keeps its node alive, so an id is never reused while cached)."""
+    @wraps(method)
+    def said(self, node, *args, **options):
+        key = method.__name__, id(node), args, tuple(options.items())
+        hit = self._said.get(key)
+        if hit is None or hit[0] is not node:
+            hit = self._said[key] = node, method(self, node, *args, **options)
+        return hit[1]
+    return said
+
+
 class Realizer:
-    """Speaks logical forms in one style."""
+    """Speaks logical forms in one style (one realizer may speak many forms)."""
 
     def __init__(self, style: Style):
         self.s = style
         self.t = _frames()
+        self._said: dict[tuple, tuple[object, str]] = {}
 
     # ---------------------------------------------------------------- instructions
     def instruction(self, instruction: lf.Instruction) -> str:
@@ -173,6 +188,7 @@ class Realizer:
                             property=prop.model_copy(update={"negated": False}))
         return None
 
+    @_by_node
     def body(self, body: lf.Body, top: bool = False) -> str:
         if not isinstance(body, lf.Sequence):
             among = self.among(body) if top else None
@@ -187,6 +203,7 @@ class Realizer:
         return str(self.t.sequence(form, steps, gerunds))
 
     # ---------------------------------------------------------------- commands
+    @_by_node
     def command(self, c: lf.Pick | lf.Place | lf.Push, arm_mode: str, obj: str | None = None,
                 gerund: bool = False) -> str:
         """One command; `arm_mode` is lead, trailing or fronted; `gerund` for 'before X-ing'."""
@@ -244,6 +261,7 @@ class Realizer:
         return f"among the {domain}, {self.command(c, arm_mode, obj=obj)}"
 
     # ---------------------------------------------------------------- conditions
+    @_by_node
     def condition(self, c: lf.Condition) -> str:
         if isinstance(c, lf.Holds):
             negated = isinstance(c.property, lf.NotKind) or getattr(c.property, "negated", False)
@@ -335,12 +353,14 @@ class Realizer:
             return words
         return [_ORDINAL_WORDS[ordinal.rank], *words, self.from_side(ordinal)]
 
+    @_by_node
     def landmark(self, ref: lf.Ref, determiner: bool = True) -> str:
         """A reference described by premodifiers only."""
         premods = [self.premod(c) for c in sorted(ref.constraints, key=_english_order)
                    if not isinstance(c, lf.OrdinalIs)]
         return ("the " if determiner else "") + " ".join(self.head(ref, premods))
 
+    @_by_node
     def ref(self, ref: lf.Ref, determiner: bool = True, relative: bool = False) -> str:
         """A reference; `relative` puts every relation in a relative clause."""
         premods: list[str] = []

@@ -24,13 +24,13 @@ from robofollow.compiler import lf
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.model import Model
 from robofollow.compiler.observation import look_alike
-from robofollow.compiler.realize import STYLES, realize
+from robofollow.compiler.realize import STYLES, Realizer
 from robofollow.compiler.spec import Level, Scene, Spec
 from robofollow.compiler.task_rules import TaskRules, arms_of
-from robofollow.compiler.wording_rules import wording_problems
 from robofollow.compiler.wordings import GENERATORS, Describer, concepts
 
-MOVED_LEVELS = ("L1", "L3")  # levels whose tasks say whether the referent's motion moved
+MOVED_LEVELS = ("L1", "L3")
+_STYLES = sorted(STYLES)  # levels whose tasks say whether the referent's motion moved
 
 
 class TestTask(Model):
@@ -130,6 +130,7 @@ class _Generator:
         self.rejected: list[Rejection] = []
         self.describers: dict[str, Describer] = {}
         self.spoken: dict[tuple[str, str], tuple[str, str | None]] = {}
+        self.realizers = {name: Realizer(style) for name, style in STYLES.items()}
 
     def reject(self, level: Level, layout: str, instruction: str, origin: str,
                reason: str) -> None:
@@ -137,11 +138,14 @@ class _Generator:
                                        instruction=instruction, origin=origin, reason=reason))
 
     def consider(self, level: Level, layout: str, instruction: str, form: lf.Instruction,
-                 origin: str, wording: str, task_id: str | None = None) -> bool:
+                 origin: str, wording: str, task_id: str | None = None,
+                 form_json: str | None = None) -> bool:
         """Keep the candidate as a test task, or reject it with the first rule it breaks;
         whether kept."""
+        form_json = form_json or lf.to_json(form)
         examined = self.rules.examine(level, layout, instruction, form,
-                                      arms_of(self.training[origin]), every=False)
+                                      arms_of(self.training[origin]), every=False,
+                                      form_json=form_json)
         if examined.findings:
             kind, message = examined.findings[0]
             self.reject(level, layout, instruction, origin, f"{kind}: {message}")
@@ -157,11 +161,11 @@ class _Generator:
             return False
         self.keep(TestTask(id=task_id, scene=self.scene.id, level=level, layout=layout,
                            instruction=instruction, form=form, behaviour=examined.behaviour,
-                           origin=origin, wording=wording, motion=motion))
+                           origin=origin, wording=wording, motion=motion), form_json)
         return True
 
-    def keep(self, task: TestTask) -> None:
-        self.rules.keep(task.id, task.level, task.layout, task.form)
+    def keep(self, task: TestTask, form_json: str | None = None) -> None:
+        self.rules.keep(task.id, task.level, task.layout, task.form, form_json)
         self.tasks.append(task)
 
     def keep_listed(self, level: Level) -> None:
@@ -248,7 +252,8 @@ class _Generator:
         text, problem = self.speak(novel, data, int(digest[:8], 16), queue.layout)
         if problem:
             self.reject(level, queue.layout, text, queue.origin, problem)
-        elif self.consider(level, queue.layout, text, novel, queue.origin, wording, task_id):
+        elif self.consider(level, queue.layout, text, novel, queue.origin, wording, task_id,
+                           data):
             queue.kept += 1
             order[task_id] = index, place
         return True
@@ -257,13 +262,11 @@ class _Generator:
               layout: str) -> tuple[str, str | None]:
         """English for a form in the first style (from `pick` on) that uses only the scene's
         training words and reads as it is scored; else the first style's text and why not."""
-        styles = sorted(STYLES)
-        grounder = self.rules.grounders(layout)[0]
         first = None
-        for offset in range(len(styles)):
-            text, problem = self.words(form, form_json, styles[(pick + offset) % len(styles)])
+        for offset in range(len(_STYLES)):
+            text, problem = self.words(form, form_json, _STYLES[(pick + offset) % len(_STYLES)])
             if problem is None:
-                problems = wording_problems(text, form, grounder)
+                problems = self.rules.wording(layout, text, form, form_json)
                 problem = f"wording: {problems[0]}" if problems else None
             if problem is None:
                 return text, None
@@ -275,7 +278,7 @@ class _Generator:
         scene uses (memoised: the same forms come up on other layouts and from other tasks)."""
         key = form_json, style
         if key not in self.spoken:
-            text = realize(form, style)
+            text = self.realizers[style].instruction(form)
             unknown = concepts(text) - self.vocabulary
             words = ", ".join(sorted(value for _, value in unknown))
             self.spoken[key] = text, (f"words: no training instruction of {self.scene.id} "

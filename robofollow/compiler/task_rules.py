@@ -143,6 +143,7 @@ class _Grounded:
     level: str
     instruction: str
     form: lf.Instruction
+    form_json: str
     nominal: Behaviour  # as the words give it
     behaviour: Behaviour  # arms filled
     grounders: list[Grounder]  # nominal first, then the jitter extremes
@@ -179,21 +180,26 @@ class TaskRules:
         self.repertoire = Repertoire(scene, training)
         self._grounders: dict[str, list[Grounder]] = {}
         self._infeasible: dict[tuple[str, Behaviour], list[str]] = {}
+        self._wordings: dict[tuple[str, str, str], list[str]] = {}
 
     def grounders(self, layout: str) -> list[Grounder]:
         """The layout's grounders: nominal positions first, then the jitter extremes."""
         if layout not in self._grounders:
-            self._grounders[layout] = [Grounder(w) for w in jitter_worlds(self.scene, layout)]
+            still: dict = {}  # what reads no position is the same in every jittered world
+            self._grounders[layout] = [Grounder(w, still)
+                                       for w in jitter_worlds(self.scene, layout)]
         return self._grounders[layout]
 
     def examine(self, level: str, layout: str, instruction: str, form: lf.Instruction,
-                arms: Arms, every: bool = True) -> Examination:
+                arms: Arms, every: bool = True, form_json: str | None = None) -> Examination:
         """The rules' findings for one task (every one, or up to the first rule that finds
-        something), and its behaviour as far as it grounds. The task is not remembered:
-        `keep` it once it is kept. The cheap rules come first, the jitter extremes last."""
+        something), and its behaviour as far as it grounds; `form_json` is the form's
+        canonical JSON where the caller has it. The task is not remembered: `keep` it once it
+        is kept. The cheap rules come first, the jitter extremes last."""
         result = Examination()
         found = result.findings
-        found += self.placement(level, layout, instruction, lf.to_json(form))
+        form_json = form_json or lf.to_json(form)
+        found += self.placement(level, layout, instruction, form_json)
         grounders = self.grounders(layout)
         world = grounders[0].world
         if found and not every:
@@ -204,7 +210,8 @@ class TaskRules:
             found.append((grounding_kind(error), grounding_message(error, world)))
             return result
         result.behaviour = arms(nominal, world)
-        task = _Grounded(level, instruction, form, nominal, result.behaviour, grounders)
+        task = _Grounded(level, instruction, form, form_json, nominal, result.behaviour,
+                         grounders)
         for kind, rule in _GROUNDED_RULES:
             if found and not every:
                 break
@@ -243,14 +250,24 @@ class TaskRules:
     def _wording(self, task: _Grounded) -> list[str]:
         if task.instruction in self.facts.instructions:
             return []  # a training instruction: the spec author's words
-        return wording_problems(task.instruction, task.form, task.grounders[0])
+        return self.wording(task.world.layout.name, task.instruction, task.form, task.form_json)
+
+    def wording(self, layout: str, instruction: str, form: lf.Instruction,
+                form_json: str) -> list[str]:
+        """wording_problems on the layout's nominal positions (memoised: the split generator
+        asks it of a candidate before examining it)."""
+        key = layout, instruction, form_json
+        if key not in self._wordings:
+            self._wordings[key] = wording_problems(instruction, form, self.grounders(layout)[0])
+        return self._wordings[key]
 
     def _jitter(self, task: _Grounded) -> list[str]:
         unstable = first_unstable(task.form, task.grounders[1:], task.nominal, first_case=1)
         return [] if unstable is None else [jitter_problem(unstable, task.nominal)]
 
-    def keep(self, task_id: str, level: str, layout: str, form: lf.Instruction) -> None:
-        self.seen.add(task_id, level, layout, lf.to_json(form))
+    def keep(self, task_id: str, level: str, layout: str, form: lf.Instruction,
+             form_json: str | None = None) -> None:
+        self.seen.add(task_id, level, layout, form_json or lf.to_json(form))
 
 
 def grounding_kind(error: GroundingError) -> str:

@@ -54,6 +54,7 @@ class World:
         self.bodies: dict[str, Body] = scene.bodies_in(layout)
         offsets = offsets or {}
         self.poses: dict[str, Pose] = {b: Pose(*map(float, p)) for b, p in (positions or {}).items()}
+        self.shifted: set[str] = set(self.poses)  # bodies away from their nominal positions
         for body in self.layout.placed:
             self._pose(body, offsets)
 
@@ -70,9 +71,13 @@ class World:
             if placed.support is None:
                 dx, dy = offsets.get(name, (0.0, 0.0))
                 self.poses[name] = Pose(placed.x + dx, placed.y + dy, placed.z)
+                shifted = (dx, dy) != (0.0, 0.0)
             else:
                 support = self.poses[placed.support]
                 self.poses[name] = Pose(support.x, support.y, placed.z)
+                shifted = placed.support in self.shifted
+            if shifted:
+                self.shifted.add(name)
         return self.poses[body]
 
     @property
