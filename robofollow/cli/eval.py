@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import difflib
+import json
 import os
 import sys
 from pathlib import Path
@@ -171,6 +172,53 @@ def cmd_report(args) -> int:
         print(f"wrote {args.out}")
     else:
         print(text)
+    return 0
+
+
+def add_compare(commands) -> None:
+    p = commands.add_parser(
+        "compare", help="is run A really better than run B? paired differences with intervals",
+        description="Pair the episodes of RUN_A and each later run by id (and the hash of their "
+                    "initial state) and give, for every scene x level cell, every level and "
+                    "the average, the difference in IS, ES and CR (A - B, points) with a 95% "
+                    "interval over tasks (a cluster bootstrap) and a sign-flip p-value over "
+                    "tasks, adjusted by Holm's method; one verdict per level. Reads each run's "
+                    "episodes.jsonl, or its scores.csv.gz where it keeps only that (the "
+                    "shipped results in docs/results). See docs/statistics.md.",
+        epilog="example: robofollow compare docs/results/baselines/scene2-text "
+               "docs/results/baselines/scene2-blind")
+    p.add_argument("runs", nargs="+", metavar="RUN", help="RUN_A RUN_B [RUN_C ...]: each "
+                   "later run is compared with the first")
+    p.add_argument("--json", action="store_true", help="print the comparison as JSON")
+    p.add_argument("--out", metavar="DIR", help="write compare.md and compare.json here (one "
+                   "pair) or DIR/<A>-vs-<B>/ (several)")
+    p.set_defaults(handler=cmd_compare)
+
+
+def cmd_compare(args) -> int:
+    from robofollow.eval.compare import compare_runs, markdown
+    from robofollow.files import write_json_atomic
+
+    runs = [Path(run) for run in args.runs]
+    if len(runs) < 2:
+        raise RoboFollowError("compare takes at least two runs: RUN_A RUN_B [RUN_C ...]")
+    results = [compare_runs(runs[0], other) for other in runs[1:]]
+    for result in results:
+        for warning in result["warnings"]:
+            print(f"warning: {warning}", file=sys.stderr)
+    if args.out:
+        for result in results:
+            out = Path(args.out)
+            if len(results) > 1:
+                out = out / f"{Path(result['a']).name}-vs-{Path(result['b']).name}"
+            out.mkdir(parents=True, exist_ok=True)
+            (out / "compare.md").write_text(markdown(result), encoding="utf-8")
+            write_json_atomic(out / "compare.json", result)
+            print(f"wrote {out / 'compare.md'} and compare.json", file=sys.stderr)
+    if args.json:
+        print(json.dumps(results[0] if len(results) == 1 else results, indent=2))
+    elif not args.out:
+        print("\n".join(markdown(result) for result in results))
     return 0
 
 

@@ -34,6 +34,20 @@ _TEMPLATES = jinja2.Environment(
     autoescape=jinja2.select_autoescape(["html", "html.j2"], default_for_string=True,
                                         default=False),
     trim_blocks=True, lstrip_blocks=True, undefined=jinja2.StrictUndefined)
+
+
+def _interval(bounds: list[float] | None) -> str:
+    """An interval as the reports print it ('n/a': a cell of one task has no task interval)."""
+    return "n/a" if bounds is None else f"{bounds[0]:.1f}–{bounds[1]:.1f}"
+
+
+def _rounds_of(cell: dict) -> str:
+    """Episodes per task in a cell (a whole number when every task ran as often)."""
+    rounds = cell["episodes"] / max(cell["tasks"], 1)
+    return f"{rounds:.0f}" if rounds == int(rounds) else f"{rounds:.1f}"
+
+
+_TEMPLATES.globals.update(interval=_interval, rounds_of=_rounds_of)
 VIDEO_LINK = re.compile(r"videos/[A-Za-z0-9_.#-]+\.mp4")  # what the runner writes
 DID = ("as instructed", "another training task", "other branch", "unrecognised")
 TOP = 15  # confusions and failure reasons listed

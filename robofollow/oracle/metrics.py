@@ -4,10 +4,13 @@ Per scene x level: IS and ES are means over episodes; CR is the mean over tasks 
 completion rate (a task macro average; the episode micro average is kept too). Avg is the
 mean over the scene x level cells. Everything is reported on a 0-100 scale.
 
-Each cell also carries a 95% Wilson score interval for each metric ("ci95"): exact in kind
-for CR (binary outcomes; with equal rounds per task the macro average is the episode
-proportion), and conservative for IS and ES (per-episode scores in [0, 1] with mean p have a
-variance of at most p (1 - p), the binomial one).
+Each cell also carries two 95% intervals for each metric:
+- "ci95_tasks": a cluster bootstrap over the cell's tasks (intervals.py), the one to read: the
+  rounds of one task are correlated, and the tasks are the independent units (None for a cell
+  of one task; where every task has the same value there is nothing to resample, and it is the
+  Wilson interval over the tasks);
+- "ci95": the Wilson score interval over its episodes, as if every episode were independent
+  (too narrow when the rounds of a task agree; kept beside it to show by how much).
 
 L1 and L3 cells also split their episodes by the task's motion ("by_motion"): "moved" (the
 expert moves otherwise than in the training task) and "as-trained" (it moves as trained; a
@@ -28,6 +31,7 @@ from collections.abc import Iterable, Mapping
 import numpy as np
 
 from robofollow.compiler.spec import MOTION_LEVELS
+from robofollow.oracle.intervals import task_interval
 
 METRICS = ("IS", "ES", "CR")
 MOTIONS = ("moved", "as-trained")  # an L1 / L3 task's motion, against its training task's
@@ -46,6 +50,7 @@ def table(results: Iterable[Mapping]) -> dict:
         cells.setdefault(scene, {})[level] = {**_scores(episodes), **_references(episodes)}
         cell = cells[scene][level]
         cell["ci95"] = {m: wilson(cell[m] / 100, len(episodes)) for m in METRICS}
+        cell["ci95_tasks"] = task_intervals(episodes)
         if level in MOTION_LEVELS:
             cell["by_motion"] = by_motion(episodes)
     flat = [cell for levels in cells.values() for cell in levels.values()]
@@ -66,6 +71,29 @@ def _scores(episodes: list[Mapping]) -> dict:
             "CR": _percent(np.mean(done) for done in tasks.values()),
             "CR_micro": _percent(e["complete"] for e in episodes),
             "episodes": len(episodes), "tasks": len(tasks)}
+
+
+def task_intervals(episodes: list[Mapping]) -> dict[str, list[float] | None]:
+    """Each metric's 95% cluster-bootstrap interval over the episodes' tasks (0-100 scale)."""
+    tasks: dict[str, list[Mapping]] = defaultdict(list)
+    for e in episodes:
+        tasks[e["task"]].append(e)
+    counts = [len(group) for group in tasks.values()]
+    values = {"IS": ([np.mean([e["intent_score"] for e in g]) for g in tasks.values()], counts),
+              "ES": ([np.mean([e["execution_score"] for e in g]) for g in tasks.values()],
+                     counts),
+              "CR": ([np.mean([bool(e["complete"]) for e in g]) for g in tasks.values()],
+                     [1] * len(tasks))}
+    found = {}
+    for metric, (means, weights) in values.items():
+        interval = task_interval(means, weights)
+        if interval is None:
+            found[metric] = None
+        elif interval[0] == interval[1]:  # every task alike: nothing to resample
+            found[metric] = wilson(interval[0], len(tasks))
+        else:
+            found[metric] = [round(100 * interval[0], 1), round(100 * interval[1], 1)]
+    return found
 
 
 def by_motion(episodes: list[Mapping]) -> dict:

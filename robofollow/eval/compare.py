@@ -1,0 +1,223 @@
+"""`robofollow compare`: is run A really better than run B? Episodes are paired by their id
+and checked by the hash of their initial state; each difference in IS / ES / CR comes with a
+task-clustered 95% interval and a sign-flip p-value over tasks (oracle/intervals.py), adjusted
+by Holm's method over every row compared, per metric (docs/statistics.md).
+
+Rows: each scene x level cell, each level over the scenes (each scene's cell counting
+equally, as Table 1's averages do) and the average over every cell.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from robofollow.compiler.spec import LEVELS
+from robofollow.errors import RoboFollowError
+from robofollow.eval.run_folder import RESULTS, RUN_FILE, read_results
+from robofollow.eval.scores import SCORES, read_scores
+from robofollow.oracle.intervals import holm, paired_test
+from robofollow.oracle.metrics import METRICS
+
+ALPHA = 0.05
+_FIELDS = {"IS": "intent", "ES": "execution", "CR": "complete"}
+NAMED = 5  # unpaired or mismatched episodes named in a warning
+
+
+class CompareError(RoboFollowError):
+    """Runs that cannot be compared."""
+
+
+def run_scores(run: Path) -> list[dict]:
+    """A run's episodes as {episode, scene, level, task, hash, intent, execution, complete}:
+    from its full records (RUN/episodes.jsonl) or, where a run keeps only those, its score
+    file (RUN/scores.csv.gz)."""
+    if (run / RESULTS).is_file():
+        return [{"episode": r["episode"], "scene": r["scene"], "level": r["level"],
+                 "task": r["task"], "hash": r.get("hashes", {}).get("episode", ""),
+                 "intent": float(r["intent_score"]), "execution": float(r["execution_score"]),
+                 "complete": bool(r["complete"])} for r in read_results(run / RESULTS)]
+    if (run / SCORES).is_file():
+        rows = []
+        for row in read_scores(run / SCORES):
+            task = row["episode"].partition("#")[0]
+            scene, level = task.split("/")[:2]
+            rows.append({"episode": row["episode"], "scene": scene, "level": level,
+                         "task": task, "hash": row["hash"], "intent": row["intent"],
+                         "execution": row["execution"], "complete": row["complete"]})
+        return rows
+    what = "an evaluation run" if (run / RUN_FILE).is_file() else "no evaluation run"
+    raise CompareError(f"{run} holds {what} without episodes (no {RESULTS} or {SCORES})")
+
+
+@dataclass
+class Pairing:
+    """The episodes two runs share, and those left out."""
+    pairs: list[tuple[dict, dict]] = field(default_factory=list)
+    only_a: list[str] = field(default_factory=list)
+    only_b: list[str] = field(default_factory=list)
+    mismatched: list[str] = field(default_factory=list)  # same id, other initial state
+
+    def warnings(self, a: str, b: str) -> list[str]:
+        found = []
+        for episodes, what in ((self.only_a, f"only in {a}"), (self.only_b, f"only in {b}"),
+                               (self.mismatched, ("started from other initial states "
+                                                  "(their state hashes differ)"))):
+            if episodes:
+                named = ", ".join(episodes[:NAMED]) + (
+                    f" and {len(episodes) - NAMED} more" if len(episodes) > NAMED else "")
+                found.append(f"{len(episodes)} episode(s) {what}, left out: {named}")
+        return found
+
+
+def pair(a: list[dict], b: list[dict]) -> Pairing:
+    """Pair episodes by id; those whose recorded state hashes differ are left out."""
+    by_id = {row["episode"]: row for row in b}
+    pairing = Pairing()
+    for row in sorted(a, key=lambda r: r["episode"]):
+        other = by_id.pop(row["episode"], None)
+        if other is None:
+            pairing.only_a.append(row["episode"])
+        elif row["hash"] and other["hash"] and row["hash"] != other["hash"]:
+            pairing.mismatched.append(row["episode"])
+        else:
+            pairing.pairs.append((row, other))
+    pairing.only_b = sorted(by_id)
+    return pairing
+
+
+def _task_differences(pairs: list[tuple[dict, dict]]) -> dict[str, dict]:
+    """Per task: its cell, paired episodes, and each metric's mean A, B and A - B (0-1)."""
+    grouped: dict[str, list[tuple[dict, dict]]] = defaultdict(list)
+    for a, b in pairs:
+        grouped[a["task"]].append((a, b))
+    tasks = {}
+    for task, group in grouped.items():
+        entry = {"cell": (group[0][0]["scene"], group[0][0]["level"]), "episodes": len(group)}
+        for metric, name in _FIELDS.items():
+            a = np.mean([float(x[name]) for x, _ in group])
+            b = np.mean([float(y[name]) for _, y in group])
+            entry[metric] = (a, b)
+        tasks[task] = entry
+    return tasks
+
+
+def _row(label: dict, tasks: list[dict], cells: dict[tuple, float]) -> dict:
+    """One row: per metric, A and B, the difference with its interval and p-value (points).
+    `cells` weighs each task's cell (1 for one cell; 1 / its total for cells averaged)."""
+    row = dict(label, tasks=len(tasks), episodes=sum(t["episodes"] for t in tasks))
+    for metric in METRICS:
+        base = np.array([t["episodes"] if metric != "CR" else 1.0 for t in tasks])
+        totals = defaultdict(float)
+        for task, weight in zip(tasks, base, strict=True):
+            totals[task["cell"]] += weight
+        weights = np.array([w * cells[t["cell"]] / totals[t["cell"]]
+                            for t, w in zip(tasks, base, strict=True)])
+        a = np.array([t[metric][0] for t in tasks])
+        b = np.array([t[metric][1] for t in tasks])
+        test = paired_test(a - b, weights)
+        row[metric] = {"A": 100 * float(np.average(a, weights=weights)),
+                       "B": 100 * float(np.average(b, weights=weights)),
+                       "difference": 100 * test.estimate,
+                       "interval": None if test.interval is None else
+                       [100 * test.interval[0], 100 * test.interval[1]],
+                       "p": test.p}
+    return row
+
+
+def compare_runs(a: Path, b: Path) -> dict:
+    """The paired comparison of run B with run A: {"a", "b", "pairing", "warnings", "rows",
+    "verdicts"}; differences are A - B in points."""
+    pairing = pair(run_scores(a), run_scores(b))
+    if not pairing.pairs:
+        raise CompareError(f"{a} and {b} share no episode: nothing to compare (were they run "
+                           "on the same specs?)")
+    tasks = _task_differences(pairing.pairs)
+    cells = sorted({t["cell"] for t in tasks.values()},
+                   key=lambda c: (c[0], LEVELS.index(c[1]) if c[1] in LEVELS else 99))
+    rows = [_row({"scene": s, "level": lv}, [t for t in tasks.values() if t["cell"] == (s, lv)],
+                 {(s, lv): 1.0}) for s, lv in cells]
+    for level in LEVELS:  # a level over several scenes (over one, it is that scene's cell)
+        chosen = [t for t in tasks.values() if t["cell"][1] == level]
+        spanned = {t["cell"] for t in chosen}
+        if len(spanned) > 1:
+            rows.append(_row({"scene": "all", "level": level}, chosen,
+                             {c: 1.0 / len(spanned) for c in spanned}))
+    if len(cells) > 1:
+        rows.append(_row({"scene": "all", "level": "avg"}, list(tasks.values()),
+                         {c: 1.0 / len(cells) for c in cells}))
+    for metric in METRICS:
+        for row, adjusted in zip(rows, holm([r[metric]["p"] for r in rows]), strict=True):
+            row[metric]["p_holm"] = adjusted
+    return {"a": str(a), "b": str(b),
+            "pairing": {"pairs": len(pairing.pairs), "only_a": len(pairing.only_a),
+                        "only_b": len(pairing.only_b), "mismatched": len(pairing.mismatched)},
+            "warnings": pairing.warnings(a.name, b.name), "rows": rows,
+            "verdicts": [verdict(row, a.name, b.name) for row in _headline(rows)]}
+
+
+def _headline(rows: list[dict]) -> list[dict]:
+    """The rows a verdict is given for: each level (its cell where one scene has it), then
+    the average."""
+    chosen = []
+    for level in (*LEVELS, "avg"):
+        found = [r for r in rows if r["level"] == level]
+        pooled = [r for r in found if r["scene"] == "all"]
+        chosen += pooled or found
+    return chosen
+
+
+def verdict(row: dict, a: str, b: str, metric: str = "IS") -> str:
+    """One line: which run is ahead on `metric` in a row, by how much, and whether the
+    difference holds at the 5% level after Holm's adjustment."""
+    cell = row[metric]
+    where = ("on average" if row["level"] == "avg" else f"at {row['level']}"
+             + ("" if row["scene"] == "all" else f" in {row['scene']}"))
+    shown = _signed(cell["difference"]) + (" " + _bounds(cell["interval"]))
+    p = _p(cell["p_holm"])
+    tail = f"p {p if p.startswith('<') else '= ' + p} (Holm), {row['tasks']} tasks, " \
+           f"{row['episodes']} pairs"
+    if cell["p_holm"] < ALPHA:
+        ahead, behind = (a, b) if cell["difference"] > 0 else (b, a)
+        return f"{ahead} > {behind} {where} ({metric}): {shown}, {tail}"
+    return f"{a} ≈ {b} {where} ({metric}): {shown}, {tail}: not told apart"
+
+
+def _signed(value: float) -> str:
+    return f"{value:+.1f}"
+
+
+def _bounds(interval: list[float] | None) -> str:
+    return "[n/a]" if interval is None else f"[{interval[0]:+.1f}, {interval[1]:+.1f}]"
+
+
+def _p(value: float) -> str:
+    return f"{value:.3g}" if value >= 0.001 else "< 0.001"
+
+
+def markdown(result: dict) -> str:
+    """The comparison as markdown: verdicts, then a table per metric."""
+    a, b = Path(result["a"]).name, Path(result["b"]).name
+    pairing = result["pairing"]
+    lines = [f"# {a} − {b}", "",
+             (f"{pairing['pairs']} paired episodes (by id, with the same initial state); "
+              f"differences are {a} − {b} in points, with 95% intervals over tasks (a cluster "
+              "bootstrap) and sign-flip p-values over tasks, adjusted by Holm's method over "
+              "every row of a metric (docs/statistics.md)."), ""]
+    lines += [f"- {warning}" for warning in result["warnings"]]
+    lines += ["", "## Verdicts (Intent)", ""] + [f"- {v}" for v in result["verdicts"]]
+    for metric in METRICS:
+        lines += ["", f"## {metric}", "",
+                  f"| Scene | Level | {a} | {b} | Δ | 95% interval | p | p (Holm) | n |",
+                  "|---|---|---:|---:|---:|---|---:|---:|---|"]
+        for row in result["rows"]:
+            cell = row[metric]
+            n = f"{row['tasks']} tasks, {row['episodes']} pairs"
+            lines.append(f"| {row['scene']} | {row['level']} | {cell['A']:.1f} | "
+                         f"{cell['B']:.1f} | {_signed(cell['difference'])} | "
+                         f"{_bounds(cell['interval'])} | {_p(cell['p'])} | "
+                         f"{_p(cell['p_holm'])} | {n} |")
+    return "\n".join(lines) + "\n"

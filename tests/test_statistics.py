@@ -1,0 +1,134 @@
+"""Task-clustered intervals and paired comparisons on synthetic runs with known answers
+(docs/statistics.md): identical runs differ by nothing; a run one point better in every
+episode is told apart at every level; on clustered benchmarks the interval over tasks covers
+the true value about 95% of the time where the Wilson interval over episodes does not."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from robofollow.cli import main
+from robofollow.errors import RoboFollowError
+from robofollow.eval.compare import compare_runs, markdown, pair
+from robofollow.eval.scores import write_scores
+from robofollow.oracle.intervals import holm, paired_test
+from robofollow.oracle.metrics import task_intervals, wilson
+
+SCENES, LEVELS, TASKS, ROUNDS = ("scene1", "scene2"), ("L0", "L1", "L2", "L3"), 10, 3
+
+
+def _records(seed: int, shift: float = 0.0) -> list[dict]:
+    """A synthetic run: per-task abilities, rounds around them; `shift` added to every
+    episode's Intent and Execution."""
+    rng = np.random.default_rng(seed)
+    records = []
+    for scene in SCENES:
+        for level in LEVELS:
+            for task in range(TASKS):
+                ability = rng.uniform(0.1, 0.8)
+                for round_index in range(1, ROUNDS + 1):
+                    score = float(np.clip(ability + rng.normal(0, 0.1), 0, 0.98))
+                    task_id = f"{scene}/{level}/t{task}"
+                    records.append({
+                        "episode": f"{task_id}#r{round_index}", "scene": scene, "level": level,
+                        "task": task_id, "hashes": {"episode": f"h{task}{round_index}"},
+                        "intent_score": score + shift, "execution_score": score / 2 + shift,
+                        "complete": bool(score > 0.5)})
+    return records
+
+
+def _run(tmp_path, name: str, records: list[dict]):
+    folder = tmp_path / name
+    folder.mkdir()
+    write_scores(folder / "scores.csv.gz", records)
+    return folder
+
+
+def test_identical_runs_differ_by_nothing(tmp_path):
+    result = compare_runs(_run(tmp_path, "a", _records(1)), _run(tmp_path, "b", _records(1)))
+    assert result["pairing"]["pairs"] == len(SCENES) * len(LEVELS) * TASKS * ROUNDS
+    for row in result["rows"]:
+        for metric in ("IS", "ES", "CR"):
+            cell = row[metric]
+            assert cell["difference"] == 0 and cell["p"] == 1 and cell["p_holm"] == 1
+            assert cell["interval"][0] <= 0 <= cell["interval"][1]
+    assert all("not told apart" in line for line in result["verdicts"])
+
+
+def test_one_point_better_everywhere_is_told_apart_at_every_level(tmp_path):
+    a = _run(tmp_path, "better", _records(2, shift=0.01))
+    result = compare_runs(a, _run(tmp_path, "base", _records(2)))
+    levels = {row["level"] for row in result["rows"]}
+    assert levels == {*LEVELS, "avg"}
+    for row in result["rows"]:
+        for metric in ("IS", "ES"):
+            cell = row[metric]
+            assert cell["difference"] == pytest.approx(1.0)
+            assert cell["p_holm"] < 0.05 and cell["interval"][0] > 0, (row["scene"],
+                                                                        row["level"], metric)
+    assert len(result["verdicts"]) == len(LEVELS) + 1
+    assert all(line.startswith("better > base") for line in result["verdicts"])
+    assert "| all | L2 |" in markdown(result)
+
+
+def test_the_interval_over_tasks_covers_where_wilson_does_not():
+    """500 simulated cells of 16 tasks x 10 rounds whose tasks differ (success rates drawn
+    uniformly): the true mean is 50."""
+    rng = np.random.default_rng(7)
+    covered = {"tasks": 0, "wilson": 0}
+    simulations = 500
+    for _ in range(simulations):
+        rates = rng.uniform(0, 1, 16)
+        episodes = [{"task": f"t{t}", "intent_score": float(rng.random() < rates[t]),
+                     "execution_score": 0.0, "complete": False}
+                    for t in range(16) for _ in range(10)]
+        low, high = task_intervals(episodes)["IS"]
+        covered["tasks"] += low <= 50 <= high
+        mean = np.mean([e["intent_score"] for e in episodes])
+        low, high = wilson(mean, len(episodes))
+        covered["wilson"] += low <= 50 <= high
+    assert 0.90 <= covered["tasks"] / simulations <= 0.98, covered
+    assert covered["wilson"] / simulations < 0.8, covered
+
+
+def test_pairing_leaves_out_what_does_not_pair_and_names_it(tmp_path):
+    a, b = _records(3), _records(3)
+    b[0]["hashes"] = {"episode": "another state"}
+    del b[1]
+    extra = dict(b[2], episode="scene1/L0/t9#r9")
+    pairing = pair(*[[{"episode": r["episode"], "hash": r["hashes"]["episode"]} for r in run]
+                     for run in (a, b + [extra])])
+    assert pairing.mismatched == [a[0]["episode"]]
+    assert pairing.only_a == [a[1]["episode"]] and pairing.only_b == ["scene1/L0/t9#r9"]
+    warnings = pairing.warnings("a", "b")
+    assert any(a[0]["episode"] in w and "initial states" in w for w in warnings)
+
+
+def test_holm_and_the_sign_flip_test():
+    assert holm([0.01, 0.04, 0.03]) == pytest.approx([0.03, 0.06, 0.06])
+    flat = paired_test(np.zeros(8), np.ones(8))
+    assert flat.p == 1 and flat.interval == (0.0, 0.0)
+    ahead = paired_test(np.full(8, 0.1), np.ones(8))
+    assert ahead.p == pytest.approx(2 / 2 ** 8) and ahead.estimate == pytest.approx(0.1)
+
+
+def test_compare_needs_episodes_and_says_so(tmp_path, capsys):
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    a = _run(tmp_path, "a", _records(4))
+    assert main(["compare", str(a), str(empty)]) == 1
+    err = capsys.readouterr().err
+    assert "holds no evaluation run" in err and "Traceback" not in err
+    with pytest.raises(RoboFollowError, match="at least two runs"):
+        from robofollow.cli.eval import cmd_compare
+        cmd_compare(type("Args", (), {"runs": [str(a)], "json": False, "out": None})())
+
+
+def test_a_cell_whose_tasks_all_agree_gets_the_wilson_interval_over_its_tasks():
+    episodes = [{"task": f"t{t}", "intent_score": 1.0, "execution_score": 0.5,
+                 "complete": True} for t in range(16) for _ in range(10)]
+    intervals = task_intervals(episodes)
+    assert intervals["IS"] == wilson(1.0, 16) and intervals["CR"] == wilson(1.0, 16)
+    assert intervals["ES"] == wilson(0.5, 16)
+    assert task_intervals(episodes[:10])["IS"] is None  # one task: nothing over tasks
