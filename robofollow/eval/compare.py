@@ -49,8 +49,12 @@ def run_scores(run: Path) -> list[dict]:
                          "task": task, "hash": row["hash"], "intent": row["intent"],
                          "execution": row["execution"], "complete": row["complete"]})
         return rows
-    what = "an evaluation run" if (run / RUN_FILE).is_file() else "no evaluation run"
-    raise CompareError(f"{run} holds {what} without episodes (no {RESULTS} or {SCORES})")
+    if not run.is_dir():
+        raise CompareError(f"{run}: no such run folder")
+    if (run / RUN_FILE).is_file():
+        raise CompareError(f"{run} holds an evaluation run but none of its episodes (no "
+                           f"{RESULTS} or {SCORES})")
+    raise CompareError(f"{run} holds no evaluation run (no {RUN_FILE}, {RESULTS} or {SCORES})")
 
 
 @dataclass
