@@ -8,6 +8,7 @@ import difflib
 import json
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from robofollow.cli.common import interrupted, positive, seconds, specs_of, specs_option
@@ -64,6 +65,11 @@ def add_eval(commands) -> None:
     p.add_argument("--instruction-mode", choices=INSTRUCTION_MODES,
                    default="normal", help="the episode's instruction, none, or another "
                                           "task's (default: normal)")
+    p.add_argument("--controls", metavar="LIST",
+                   help="control arms run after the run on the very same episodes, each in "
+                        "RUN/controls/<mode> with its own summary: empty (no instruction) "
+                        "and/or shuffled (another task's); the report adds the language "
+                        "effect (instructed - control) with paired intervals over tasks")
     p.add_argument("--video", choices=VIDEO_MODES, default="none",
                    help="write mp4s of these episodes to RUN/videos (default: none)")
     p.add_argument("--policy-timeout", type=seconds, metavar="S",
@@ -89,6 +95,7 @@ def add_eval(commands) -> None:
 
 def cmd_eval(args) -> int:
     from robofollow.compiled_cache import load
+    from robofollow.eval.compare import CONTROLS, control_comparisons
     from robofollow.eval.loading import with_privileged
     from robofollow.eval.policy_kind import is_server
     from robofollow.eval.report import write_report
@@ -102,15 +109,32 @@ def cmd_eval(args) -> int:
     if args.policy_timeout is not None and is_server(args.policy):
         raise RoboFollowError("--policy-timeout limits in-process policies; a server takes "
                               "its own: --policy URL?timeout=S&retries=N")
+    controls = _names(args.controls, [m for m in INSTRUCTION_MODES if m != "normal"],
+                      "control arm") if args.controls else []
+    if args.instruction_mode in controls:
+        raise RoboFollowError(f"--controls {args.instruction_mode}: the run itself gives "
+                              f"{args.instruction_mode} instructions; a control arm compares "
+                              "the instructed run with another mode")
     policy = with_privileged(args.policy) if args.allow_privileged else args.policy
     options = EvalOptions(policy, tuple(scenes), tuple(levels), args.rounds,
                           args.instruction_mode, args.video, compiled.spec.digest, tuple(tasks),
                           args.sample, args.policy_timeout if args.policy_timeout is not None
                           else None if is_server(args.policy) else DEFAULT_POLICY_TIMEOUT)
+    arms = [(Path(args.out), options)] + [
+        (Path(args.out) / CONTROLS / mode, replace(options, instruction_mode=mode))
+        for mode in controls]
     try:
-        result = evaluate(compiled, Path(args.out), options, args.workers, args.resume,
-                          progress=not args.quiet, executor=args.executor,
-                          drop_corrupt=args.drop_corrupt)
+        for out, arm in arms:
+            if arm is not options:
+                print(f"control arm: {arm.instruction_mode} instructions, {out}",
+                      file=sys.stderr)
+            outcome = evaluate(compiled, out, arm, args.workers, args.resume,
+                               progress=not args.quiet, executor=args.executor,
+                               drop_corrupt=args.drop_corrupt)
+            if arm is options:
+                result = outcome
+            else:
+                write_report(out)
     except KeyboardInterrupt:
         return interrupted("episodes", args.out)
     try:
@@ -124,6 +148,9 @@ def cmd_eval(args) -> int:
     failures = failures_text(result)
     if failures:
         print(failures)
+    for control in control_comparisons(Path(args.out)):
+        print(f"language effect, instructed - {control['mode']} instructions (Intent):")
+        print("\n".join(f"  {line}" for line in control["verdicts"]))
     print(f"report: {markdown} (and .html)")
     return 3 if failures else 0
 

@@ -132,9 +132,11 @@ def _row(label: dict, tasks: list[dict], cells: dict[tuple, float]) -> dict:
     return row
 
 
-def compare_runs(a: Path, b: Path) -> dict:
+def compare_runs(a: Path, b: Path, names: tuple[str, str] | None = None) -> dict:
     """The paired comparison of run B with run A: {"a", "b", "pairing", "warnings", "rows",
-    "verdicts"}; differences are A - B in points."""
+    "verdicts"}; differences are A - B in points. `names`: what the verdicts call the runs
+    (default: their folders' names)."""
+    first, second = names or (a.name, b.name)
     pairing = pair(run_scores(a), run_scores(b))
     if not pairing.pairs:
         raise CompareError(f"{a} and {b} share no episode: nothing to compare (were they run "
@@ -159,8 +161,8 @@ def compare_runs(a: Path, b: Path) -> dict:
     return {"a": str(a), "b": str(b),
             "pairing": {"pairs": len(pairing.pairs), "only_a": len(pairing.only_a),
                         "only_b": len(pairing.only_b), "mismatched": len(pairing.mismatched)},
-            "warnings": pairing.warnings(a.name, b.name), "rows": rows,
-            "verdicts": [verdict(row, a.name, b.name) for row in _headline(rows)]}
+            "warnings": pairing.warnings(first, second), "rows": rows,
+            "verdicts": [verdict(row, first, second) for row in _headline(rows)]}
 
 
 def _headline(rows: list[dict]) -> list[dict]:
@@ -174,14 +176,32 @@ def _headline(rows: list[dict]) -> list[dict]:
     return chosen
 
 
+CONTROLS = "controls"  # RUN/controls/<instruction mode>: a run's control arms
+
+
+def control_comparisons(run: Path) -> list[dict]:
+    """The run against each of its control arms (RUN/controls/<mode>, same episodes with
+    other instructions): {"mode", "folder", "pairs", "verdicts", "rows"}; none when it has
+    none."""
+    found = []
+    folder = run / CONTROLS
+    for arm in sorted(folder.iterdir()) if folder.is_dir() else ():
+        if (arm / RUN_FILE).is_file():
+            result = compare_runs(run, arm, ("instructed", arm.name))
+            found.append({"mode": arm.name, "folder": f"{CONTROLS}/{arm.name}",
+                          "pairs": result["pairing"]["pairs"], "verdicts": result["verdicts"],
+                          "rows": result["rows"], "warnings": result["warnings"]})
+    return found
+
+
 def verdict(row: dict, a: str, b: str, metric: str = "IS") -> str:
     """One line: which run is ahead on `metric` in a row, by how much, and whether the
     difference holds at the 5% level after Holm's adjustment."""
     cell = row[metric]
     where = ("on average" if row["level"] == "avg" else f"at {row['level']}"
              + ("" if row["scene"] == "all" else f" in {row['scene']}"))
-    shown = _signed(cell["difference"]) + (" " + _bounds(cell["interval"]))
-    p = _p(cell["p_holm"])
+    shown = _signed(cell["difference"]) + (" " + signed_interval(cell["interval"]))
+    p = p_value(cell["p_holm"])
     tail = f"p {p if p.startswith('<') else '= ' + p} (Holm), {row['tasks']} tasks, " \
            f"{row['episodes']} pairs"
     if cell["p_holm"] < ALPHA:
@@ -194,11 +214,13 @@ def _signed(value: float) -> str:
     return f"{value:+.1f}"
 
 
-def _bounds(interval: list[float] | None) -> str:
+def signed_interval(interval: list[float] | None) -> str:
+    """An interval of a difference as the tables print it."""
     return "[n/a]" if interval is None else f"[{interval[0]:+.1f}, {interval[1]:+.1f}]"
 
 
-def _p(value: float) -> str:
+def p_value(value: float) -> str:
+    """A p-value as the tables print it."""
     return f"{value:.3g}" if value >= 0.001 else "< 0.001"
 
 
@@ -222,6 +244,6 @@ def markdown(result: dict) -> str:
             n = f"{row['tasks']} tasks, {row['episodes']} pairs"
             lines.append(f"| {row['scene']} | {row['level']} | {cell['A']:.1f} | "
                          f"{cell['B']:.1f} | {_signed(cell['difference'])} | "
-                         f"{_bounds(cell['interval'])} | {_p(cell['p'])} | "
-                         f"{_p(cell['p_holm'])} | {n} |")
+                         f"{signed_interval(cell['interval'])} | {p_value(cell['p'])} | "
+                         f"{p_value(cell['p_holm'])} | {n} |")
     return "\n".join(lines) + "\n"

@@ -22,6 +22,8 @@ import numpy as np
 
 from robofollow.compiler.spec import LEVELS, MOTION_LEVELS
 from robofollow.errors import RoboFollowError
+from robofollow.eval.compare import control_comparisons, p_value, signed_interval
+from robofollow.eval.drops import level_drops
 from robofollow.eval.run_folder import RESULTS, RUN_FILE, read_results
 from robofollow.eval.runner import EvalOptions, summary, with_motion
 from robofollow.oracle.metrics import METRICS, MOTIONS, table
@@ -47,7 +49,8 @@ def _rounds_of(cell: dict) -> str:
     return f"{rounds:.0f}" if rounds == int(rounds) else f"{rounds:.1f}"
 
 
-_TEMPLATES.globals.update(interval=_interval, rounds_of=_rounds_of)
+_TEMPLATES.globals.update(interval=_interval, rounds_of=_rounds_of,
+                          signed_interval=signed_interval, p_value=p_value)
 VIDEO_LINK = re.compile(r"videos/[A-Za-z0-9_.#-]+\.mp4")  # what the runner writes
 DID = ("as instructed", "another training task", "other branch", "unrecognised")
 TOP = 15  # confusions and failure reasons listed
@@ -148,8 +151,10 @@ def _matrix(records: list[dict]) -> dict:
     return {"rows": sorted(counts), "columns": columns, "counts": dict(counts)}
 
 
-def report_data(name: str, options: EvalOptions, results: list[dict]) -> dict:
-    """Everything the templates show, computed once."""
+def report_data(name: str, options: EvalOptions, results: list[dict],
+                controls: list[dict] | None = None) -> dict:
+    """Everything the templates show, computed once (`controls`: the run against its
+    control arms, compare.control_comparisons)."""
     totals = summary(results, options)
     cells = totals["cells"]
     levels = [level for level in LEVELS if any(level in row for row in cells.values())]
@@ -190,6 +195,7 @@ def report_data(name: str, options: EvalOptions, results: list[dict]) -> dict:
             reasons[failed["stage"]][failed["reason"]] += 1
     return {
         "name": name, "options": options, "summary": totals, "levels": levels,
+        "drops": level_drops(results), "controls": controls or [],
         "metrics": METRICS, "cells": cells, "by_motion": by_motion, "motions": MOTIONS,
         "motion_unknown": sum(row["unknown"] for row in by_motion), "tasks": tasks, "names": names, "full": full,
         "instructions": instructions, "did": did, "did_kinds": DID,
@@ -218,7 +224,8 @@ def write_report(run: Path, motions: dict[str, str | None] | None = None) -> tup
     compiled episodes' motion, by episode id) fills in the records written before they carried
     it (else their motion is unknown: "-")."""
     options, results = load_run(run)
-    data = report_data(run.name, options, with_motion(results, motions or {}))
+    data = report_data(run.name, options, with_motion(results, motions or {}),
+                       control_comparisons(run))
     paths = run / "report.md", run / "report.html"
     for path in paths:
         template = _TEMPLATES.get_template(f"report{path.suffix}.j2")

@@ -48,7 +48,8 @@ def task_interval(values, weights) -> tuple[float, float] | None:
 
 @dataclass(frozen=True)
 class PairedTest:
-    """A paired difference over tasks: its estimate, 95% interval and two-sided p-value."""
+    """A difference over tasks: its estimate, 95% interval (None: too few tasks to say) and
+    two-sided p-value."""
     estimate: float
     interval: tuple[float, float] | None
     p: float
@@ -58,10 +59,10 @@ class PairedTest:
 def paired_test(differences, weights) -> PairedTest:
     """The weighted mean of per-task differences (A - B), its cluster-bootstrap interval and
     the sign-flip permutation p-value of 'no difference' (every task's difference as likely
-    negated)."""
+    negated; 1 for a single task, which cannot be tested)."""
     differences, weights = np.asarray(differences, float), np.asarray(weights, float)
     estimate = float(weighted_mean(differences, weights))
-    if not len(differences) or not np.any(differences):
+    if len(differences) < 2 or not np.any(differences):  # one task cannot be tested
         return PairedTest(estimate, task_interval(differences, weights), 1.0, len(differences))
 
     def statistic(flipped, axis=-1):
@@ -72,6 +73,34 @@ def paired_test(differences, weights) -> PairedTest:
                                   rng=np.random.default_rng(SEED))
     return PairedTest(estimate, task_interval(differences, weights), float(min(test.pvalue, 1.0)),
                       len(differences))
+
+
+def unpaired_test(first, second) -> PairedTest:
+    """mean(first) - mean(second) over two sets of tasks that do not pair (each task's value
+    counts once): a BCa bootstrap resampling each set's tasks apart, and the permutation
+    p-value of 'the two sets are alike' (task values shuffled between them)."""
+    first, second = np.asarray(first, float), np.asarray(second, float)
+    estimate = float(first.mean() - second.mean())
+
+    def difference(x, y, axis=-1):
+        return x.mean(axis) - y.mean(axis)
+
+    if len(first) < 2 or len(second) < 2:
+        return PairedTest(estimate, None, 1.0, len(first) + len(second))
+    if np.ptp(np.concatenate([first, second])) == 0:
+        return PairedTest(estimate, (estimate, estimate), 1.0, len(first) + len(second))
+    interval = estimate, estimate  # both sets constant: nothing to resample
+    if np.ptp(first) or np.ptp(second):
+        result = stats.bootstrap((first, second), difference, vectorized=True,
+                                 n_resamples=RESAMPLES, confidence_level=CONFIDENCE,
+                                 method="BCa", rng=np.random.default_rng(SEED))
+        low, high = result.confidence_interval
+        if not (np.isfinite(low) and np.isfinite(high)):
+            low, high = np.percentile(result.bootstrap_distribution, [2.5, 97.5])
+        interval = float(low), float(high)
+    test = stats.permutation_test((first, second), difference, vectorized=True,
+                                  n_resamples=PERMUTATIONS, rng=np.random.default_rng(SEED))
+    return PairedTest(estimate, interval, float(min(test.pvalue, 1.0)), len(first) + len(second))
 
 
 def holm(p_values: list[float]) -> list[float]:
