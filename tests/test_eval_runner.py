@@ -11,17 +11,20 @@ import sys
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from robofollow.cli import main
 from robofollow.eval.instructions import given_instruction
 from robofollow.eval.loading import PolicyLoadError, load_policy
 from robofollow.eval.runner import (
+    START_TOLERANCE_M,
     EvalOptions,
     EvalRunError,
     evaluate,
     read_results,
     select_episodes,
+    start_hash,
 )
 from robofollow.eval.scores import SCORES, read_scores, write_scores
 from robofollow.eval.tables import table_text
@@ -66,12 +69,14 @@ def test_the_expert_run_records_every_episode_and_scores_in_full(expert_run):
     assert "task_instruction" not in record  # only where another instruction was given
     first = record["stages"][0]
     assert first["intent"] == first["execution"] == first["weight"] and set(record["hashes"]) == {
-        "episode", "split", "instruction", "initial_state"}
+        "episode", "split", "instruction", "initial_state", "start"}
+    assert record["start_tolerance_m"] == START_TOLERANCE_M
     assert summary["splits"] == {SCENE: [benchmark().split_digests[SCENE][:16]]}
     scores = read_scores(expert_run / SCORES)
     assert [row["episode"] for row in scores] == sorted(r["episode"] for r in results)
     assert all(row["intent"] == row["execution"] == 1.0 and row["complete"] for row in scores)
     assert {row["hash"] for row in scores} == {r["hashes"]["episode"] for r in results}
+    assert {row["start"] for row in scores} == {r["hashes"]["start"] for r in results}
     again = expert_run.parent / "again.csv.gz"
     write_scores(again, list(reversed(results)))  # the same bytes in any finishing order
     assert again.read_bytes() == (expert_run / SCORES).read_bytes()
@@ -241,3 +246,14 @@ def test_a_hung_in_process_policy_is_cut_at_its_time_limit_in_the_worker_pool(tm
     with pytest.raises(SystemExit):
         main(args[:-1] + ["0"])
     assert "must be a positive number of seconds, got 0" in capsys.readouterr().err
+
+
+def test_the_start_hash_reads_the_start_within_its_tolerance():
+    positions = np.array([[0.1, 0.2, 0.3], [0.4, -0.5, 0.6]])
+    quaternions = np.array([[1.0, 0.0, 0.0, 0.0], [0.7071, 0.0, 0.0, 0.7071]])
+    start = start_hash(positions, quaternions)
+    assert start_hash(positions + START_TOLERANCE_M / 100, quaternions) == start
+    assert start_hash(positions, -quaternions) == start  # one rotation, either sign
+    moved = positions.copy()
+    moved[1, 0] += 2 * START_TOLERANCE_M
+    assert start_hash(moved, quaternions) != start

@@ -97,12 +97,17 @@ def test_pairing_leaves_out_what_does_not_pair_and_names_it(tmp_path):
     b[0]["hashes"] = {"episode": "another state"}
     del b[1]
     extra = dict(b[2], episode="scene1/L0/t9#r9")
-    pairing = pair(*[[{"episode": r["episode"], "hash": r["hashes"]["episode"]} for r in run]
-                     for run in (a, b + [extra])])
-    assert pairing.mismatched == [a[0]["episode"]]
+    a[2]["start"], b[1]["start"] = "one start", "another start"  # b[1]: a[2]'s episode
+    a[3]["start"] = "a start b does not record"
+    pairing = pair(*[[{"episode": r["episode"], "hash": r["hashes"]["episode"],
+                       "start": r.get("start", "")} for r in run] for run in (a, b + [extra])])
+    assert pairing.other_episode == [a[0]["episode"]]
+    assert pairing.other_start == [a[2]["episode"]]
     assert pairing.only_a == [a[1]["episode"]] and pairing.only_b == ["scene1/L0/t9#r9"]
+    assert len(pairing.pairs) == len(a) - 3
     warnings = pairing.warnings("a", "b")
-    assert any(a[0]["episode"] in w and "initial states" in w for w in warnings)
+    assert any(a[0]["episode"] in w and "episode hashes differ" in w for w in warnings)
+    assert any(a[2]["episode"] in w and "start tolerance" in w for w in warnings)
 
 
 def test_holm_and_the_sign_flip_test():

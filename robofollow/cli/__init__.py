@@ -11,7 +11,7 @@ from importlib.metadata import version
 
 from robofollow.cli.compile import add_audit, add_compile
 from robofollow.cli.data import add_dataset, add_generate
-from robofollow.cli.eval import add_compare, add_eval, add_report
+from robofollow.cli.eval import add_compare, add_eval, add_merge, add_report
 from robofollow.cli.parse import add_parse
 from robofollow.cli.serve import add_serve
 from robofollow.cli.sim import add_expert, add_render, add_score
@@ -30,7 +30,8 @@ def parser() -> argparse.ArgumentParser:
                         version=f"robofollow {version('robofollow')}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for add in (add_parse, add_compile, add_audit, add_score, add_expert, add_render, add_eval,
-                add_report, add_compare, add_serve, add_generate, add_vqa, add_train, add_dataset):
+                add_report, add_compare, add_merge,
+                add_serve, add_generate, add_vqa, add_train, add_dataset):
         add(commands)
     return parser
 

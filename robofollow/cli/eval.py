@@ -54,6 +54,10 @@ def add_eval(commands) -> None:
     p.add_argument("--sample", type=positive, metavar="N",
                    help="only N tasks of each scene and level, evenly spread over its task "
                         "list (a quick look; default: every task)")
+    p.add_argument("--shard", metavar="I/N",
+                   help="run only the I-th of N parts of the episodes (round-robin over the "
+                        "episode list), e.g. one task of a job array; robofollow merge joins "
+                        "the N shard folders into one run")
     p.add_argument("--rounds", type=positive, default=ROUNDS, metavar="N",
                    help=f"rounds per task, each with its own seed (default: {ROUNDS})")
     p.add_argument("--workers", type=positive, default=os.cpu_count() or 1, metavar="N",
@@ -99,7 +103,7 @@ def cmd_eval(args) -> int:
     from robofollow.eval.loading import with_privileged
     from robofollow.eval.policy_kind import is_server
     from robofollow.eval.report import write_report
-    from robofollow.eval.runner import EvalOptions, evaluate, failures_text
+    from robofollow.eval.runner import EvalOptions, evaluate, failures_text, shard_of
     from robofollow.eval.tables import table_text
 
     compiled = load(specs_of(args))
@@ -109,6 +113,8 @@ def cmd_eval(args) -> int:
     if args.policy_timeout is not None and is_server(args.policy):
         raise RoboFollowError("--policy-timeout limits in-process policies; a server takes "
                               "its own: --policy URL?timeout=S&retries=N")
+    if args.shard:
+        shard_of(args.shard)  # said before anything runs
     controls = _names(args.controls, [m for m in INSTRUCTION_MODES if m != "normal"],
                       "control arm") if args.controls else []
     if args.instruction_mode in controls:
@@ -119,7 +125,8 @@ def cmd_eval(args) -> int:
     options = EvalOptions(policy, tuple(scenes), tuple(levels), args.rounds,
                           args.instruction_mode, args.video, compiled.spec.digest, tuple(tasks),
                           args.sample, args.policy_timeout if args.policy_timeout is not None
-                          else None if is_server(args.policy) else DEFAULT_POLICY_TIMEOUT)
+                          else None if is_server(args.policy) else DEFAULT_POLICY_TIMEOUT,
+                          args.shard)
     arms = [(Path(args.out), options)] + [
         (Path(args.out) / CONTROLS / mode, replace(options, instruction_mode=mode))
         for mode in controls]
@@ -202,11 +209,38 @@ def cmd_report(args) -> int:
     return 0
 
 
+def add_merge(commands) -> None:
+    p = commands.add_parser(
+        "merge", help="join the shards of a run (eval --shard I/N) into one run",
+        description="Join the N shard folders of one run (eval --shard 1/N ... N/N, the same "
+                    "options otherwise) into a new run folder: its episodes.jsonl in the run's "
+                    "episode order, summary, scores and report. Refused, naming them, when a "
+                    "shard or an episode is missing or doubled, or the options or specs differ.",
+        epilog="example: robofollow eval --policy blind --shard 1/2 --out runs/b1 & robofollow "
+               "eval --policy blind --shard 2/2 --out runs/b2; robofollow merge runs/b1 "
+               "runs/b2 --out runs/blind")
+    p.add_argument("shards", nargs="+", metavar="SHARD", help="the shard run folders")
+    p.add_argument("--out", required=True, metavar="RUN", help="the merged run folder (new)")
+    specs_option(p)
+    p.set_defaults(handler=cmd_merge)
+
+
+def cmd_merge(args) -> int:
+    from robofollow.compiled_cache import load
+    from robofollow.eval.merge import merge
+    from robofollow.eval.tables import table_text
+
+    result = merge(load(specs_of(args)), [Path(s) for s in args.shards], Path(args.out))
+    print(f"merged {len(args.shards)} shards into {args.out} ({result['episodes']} episodes):")
+    print(table_text(result))
+    return 0
+
+
 def add_compare(commands) -> None:
     p = commands.add_parser(
         "compare", help="is run A really better than run B? paired differences with intervals",
-        description="Pair the episodes of RUN_A and each later run by id (and the hash of their "
-                    "initial state) and give, for every scene x level cell, every level and "
+        description="Pair the episodes of RUN_A and each later run by id (checking their "
+                    "episode hashes and, where recorded, their realised starts) and give, for every scene x level cell, every level and "
                     "the average, the difference in IS, ES and CR (A - B, points) with a 95% "
                     "interval over tasks (a cluster bootstrap) and a sign-flip p-value over "
                     "tasks, adjusted by Holm's method; one verdict per level. Reads each run's "

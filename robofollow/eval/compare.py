@@ -1,5 +1,7 @@
 """`robofollow compare`: is run A really better than run B? Episodes are paired by their id
-and checked by the hash of their initial state; each difference in IS / ES / CR comes with a
+and checked by their episode hash (the compiled episode: task, layout, seed) and, where both
+records carry it, the hash of their realised start (runner.start_hash, within its tolerance);
+each difference in IS / ES / CR comes with a
 task-clustered 95% interval and a sign-flip p-value over tasks (oracle/intervals.py), adjusted
 by Holm's method over every row compared, per metric (docs/statistics.md).
 
@@ -32,12 +34,14 @@ class CompareError(RoboFollowError):
 
 
 def run_scores(run: Path) -> list[dict]:
-    """A run's episodes as {episode, scene, level, task, hash, intent, execution, complete}:
+    """A run's episodes as {episode, scene, level, task, hash, start, intent, execution,
+    complete}:
     from its full records (RUN/episodes.jsonl) or, where a run keeps only those, its score
     file (RUN/scores.csv.gz)."""
     if (run / RESULTS).is_file():
         return [{"episode": r["episode"], "scene": r["scene"], "level": r["level"],
                  "task": r["task"], "hash": r.get("hashes", {}).get("episode", ""),
+                 "start": r.get("hashes", {}).get("start", ""),
                  "intent": float(r["intent_score"]), "execution": float(r["execution_score"]),
                  "complete": bool(r["complete"])} for r in read_results(run / RESULTS)]
     if (run / SCORES).is_file():
@@ -46,7 +50,8 @@ def run_scores(run: Path) -> list[dict]:
             task = row["episode"].partition("#")[0]
             scene, level = task.split("/")[:2]
             rows.append({"episode": row["episode"], "scene": scene, "level": level,
-                         "task": task, "hash": row["hash"], "intent": row["intent"],
+                         "task": task, "hash": row["hash"], "start": row["start"],
+                         "intent": row["intent"],
                          "execution": row["execution"], "complete": row["complete"]})
         return rows
     if not run.is_dir():
@@ -63,13 +68,17 @@ class Pairing:
     pairs: list[tuple[dict, dict]] = field(default_factory=list)
     only_a: list[str] = field(default_factory=list)
     only_b: list[str] = field(default_factory=list)
-    mismatched: list[str] = field(default_factory=list)  # same id, other initial state
+    other_episode: list[str] = field(default_factory=list)  # same id, other episode hash
+    other_start: list[str] = field(default_factory=list)  # same episode, starts apart
 
     def warnings(self, a: str, b: str) -> list[str]:
         found = []
         for episodes, what in ((self.only_a, f"only in {a}"), (self.only_b, f"only in {b}"),
-                               (self.mismatched, ("started from other initial states "
-                                                  "(their state hashes differ)"))):
+                               (self.other_episode, ("that are other episodes (their "
+                                                     "episode hashes differ: other specs?)")),
+                               (self.other_start, ("that started further apart than the "
+                                                   "start tolerance (their start hashes "
+                                                   "differ)"))):
             if episodes:
                 named = ", ".join(episodes[:NAMED]) + (
                     f" and {len(episodes) - NAMED} more" if len(episodes) > NAMED else "")
@@ -78,7 +87,8 @@ class Pairing:
 
 
 def pair(a: list[dict], b: list[dict]) -> Pairing:
-    """Pair episodes by id; those whose recorded state hashes differ are left out."""
+    """Pair episodes by id; those whose episode hashes differ, or whose start hashes differ
+    where both records have one, are left out."""
     by_id = {row["episode"]: row for row in b}
     pairing = Pairing()
     for row in sorted(a, key=lambda r: r["episode"]):
@@ -86,7 +96,9 @@ def pair(a: list[dict], b: list[dict]) -> Pairing:
         if other is None:
             pairing.only_a.append(row["episode"])
         elif row["hash"] and other["hash"] and row["hash"] != other["hash"]:
-            pairing.mismatched.append(row["episode"])
+            pairing.other_episode.append(row["episode"])
+        elif row.get("start") and other.get("start") and row["start"] != other["start"]:
+            pairing.other_start.append(row["episode"])
         else:
             pairing.pairs.append((row, other))
     pairing.only_b = sorted(by_id)
@@ -160,7 +172,9 @@ def compare_runs(a: Path, b: Path, names: tuple[str, str] | None = None) -> dict
             row[metric]["p_holm"] = adjusted
     return {"a": str(a), "b": str(b),
             "pairing": {"pairs": len(pairing.pairs), "only_a": len(pairing.only_a),
-                        "only_b": len(pairing.only_b), "mismatched": len(pairing.mismatched)},
+                        "only_b": len(pairing.only_b),
+                        "other_episode": len(pairing.other_episode),
+                        "other_start": len(pairing.other_start)},
             "warnings": pairing.warnings(first, second), "rows": rows,
             "verdicts": [verdict(row, first, second) for row in _headline(rows)]}
 
@@ -229,7 +243,8 @@ def markdown(result: dict) -> str:
     a, b = Path(result["a"]).name, Path(result["b"]).name
     pairing = result["pairing"]
     lines = [f"# {a} − {b}", "",
-             (f"{pairing['pairs']} paired episodes (by id, with the same initial state); "
+             (f"{pairing['pairs']} paired episodes (by id, the same episode hash and, where "
+              "recorded, the same start); "
               f"differences are {a} − {b} in points, with 95% intervals over tasks (a cluster "
               "bootstrap) and sign-flip p-values over tasks, adjusted by Holm's method over "
               "every row of a metric (docs/statistics.md)."), ""]

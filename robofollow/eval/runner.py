@@ -33,6 +33,7 @@ from dataclasses import asdict, dataclass
 from functools import partial
 from pathlib import Path
 
+import numpy as np
 from tqdm import tqdm
 
 from robofollow.benchmark.episode import Benchmark, Episode
@@ -82,14 +83,27 @@ class EvalOptions:
     tasks: tuple[str, ...] = ()  # task ids (scene/level/label) to keep; empty: every task
     sample: int | None = None  # keep this many tasks per scene and level, evenly spread
     policy_timeout: float | None = None  # seconds an in-process policy call may take
+    shard: str | None = None  # "I/N": the I-th of N round-robin parts of the episodes
 
     def to_json(self) -> dict:
-        return dict(asdict(self), scenes=list(self.scenes), levels=list(self.levels),
+        data = dict(asdict(self), scenes=list(self.scenes), levels=list(self.levels),
                     tasks=list(self.tasks))
+        if self.shard is None:
+            del data["shard"]  # (runs made before shards had no such option)
+        return data
+
+
+def shard_of(text: str) -> tuple[int, int]:
+    """'I/N' -> (I, N), 1 <= I <= N."""
+    index, _, count = text.partition("/")
+    if not (index.isdigit() and count.isdigit()) or not 1 <= int(index) <= int(count):
+        raise RoboFollowError(f"shard {text!r}: expected I/N with 1 <= I <= N, e.g. 1/4")
+    return int(index), int(count)
 
 
 def select_episodes(benchmark: Episodes, options: EvalOptions) -> list[Episode]:
-    """The options' episodes, in the compiled order (only those are parsed)."""
+    """The options' episodes, in the compiled order (only those are parsed); of a shard
+    I/N, every N-th of them from the I-th."""
 
     def chosen_id(episode_id: str) -> bool:
         task, _, round_index = episode_id.partition("#r")
@@ -105,6 +119,9 @@ def select_episodes(benchmark: Episodes, options: EvalOptions) -> list[Episode]:
             step = len(tasks) / min(options.sample, len(tasks))
             kept.update(tasks[int(i * step)] for i in range(min(options.sample, len(tasks))))
         chosen = [e for e in chosen if e.task in kept]
+    if options.shard:
+        index, count = shard_of(options.shard)
+        chosen = chosen[index - 1::count]
     return chosen
 
 
@@ -120,6 +137,20 @@ def _tasks_by_cell(episodes: list[Episode]) -> dict[tuple[str, str], list[str]]:
 
 def _digest(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()[:16]
+
+
+START_TOLERANCE_M = 0.001  # realised initial states this close count as one start (compare)
+
+
+def start_hash(positions: np.ndarray, quaternions: np.ndarray) -> str:
+    """The realised initial state on a grid: positions to START_TOLERANCE_M, orientations to
+    1e-3 (each quaternion's sign fixed). Two runs of an episode on other machines share it
+    when their starts agree within the tolerance (bar a value on a grid boundary); starts
+    further apart always differ."""
+    signs = np.where(quaternions[:, :1] < 0, -1.0, 1.0)
+    grid = np.concatenate([np.round(positions / START_TOLERANCE_M).ravel(),
+                           np.round(quaternions * signs / 1e-3).ravel()]).astype(np.int64)
+    return _digest(grid.tobytes())
 
 
 def result_record(episode: Episode, instruction: str, run: EpisodeRun) -> dict:
@@ -142,7 +173,9 @@ def result_record(episode: Episode, instruction: str, run: EpisodeRun) -> dict:
         "seconds": round(run.seconds, 3),
         "hashes": {"episode": episode.hash, "split": episode.split,
                    "instruction": _digest(instruction.encode()),
-                   "initial_state": _digest(start)}}
+                   "initial_state": _digest(start),
+                   "start": start_hash(trajectory.positions[0], trajectory.quaternions[0])},
+        "start_tolerance_m": START_TOLERANCE_M}
 
 
 def episode_record(compiled: Benchmark, episode: Episode, instruction: str,

@@ -1,7 +1,9 @@
 """RUN/scores.csv.gz: every episode's scores in a compact file a run keeps (and the reference
 runs in docs/results commit), so that later runs compare against it episode by episode: the
 episode id, its hash (what pairs two runs' episodes), its scene's split digest, the task's
-motion, Intent, Execution and completion. Byte-identical for the same records."""
+motion, Intent, Execution, completion and the hash of its realised start on a grid
+(runner.start_hash; files written before it lack that column). Byte-identical for the same
+records."""
 
 from __future__ import annotations
 
@@ -14,7 +16,8 @@ from robofollow.errors import RoboFollowError
 from robofollow.files import write_bytes_atomic
 
 SCORES = "scores.csv.gz"
-COLUMNS = ("episode", "hash", "split", "motion", "intent", "execution", "complete")
+COLUMNS = ("episode", "hash", "split", "motion", "intent", "execution", "complete", "start")
+_LATER = ("start",)  # columns that files written before them lack
 
 
 def score_rows(results: list[dict]) -> list[dict]:
@@ -22,7 +25,8 @@ def score_rows(results: list[dict]) -> list[dict]:
     return [{"episode": r["episode"], "hash": r.get("hashes", {}).get("episode", ""),
              "split": r.get("hashes", {}).get("split", ""), "motion": r.get("motion") or "",
              "intent": f"{r['intent_score']:.4f}", "execution": f"{r['execution_score']:.4f}",
-             "complete": int(bool(r["complete"]))}
+             "complete": int(bool(r["complete"])),
+             "start": r.get("hashes", {}).get("start", "")}
             for r in sorted(results, key=lambda r: r["episode"])]
 
 
@@ -40,7 +44,9 @@ def read_scores(path: Path) -> list[dict]:
         rows = list(csv.DictReader(io.StringIO(gzip.decompress(path.read_bytes()).decode())))
     except (OSError, EOFError, UnicodeDecodeError, csv.Error) as error:
         raise RoboFollowError(f"{path}: not a scores file ({error})") from None
-    if rows and set(COLUMNS) - set(rows[0]):
-        raise RoboFollowError(f"{path}: lacks the columns {', '.join(set(COLUMNS) - set(rows[0]))}")
+    lacking = sorted(set(COLUMNS) - set(_LATER) - set(rows[0])) if rows else []
+    if lacking:
+        raise RoboFollowError(f"{path}: lacks the columns {', '.join(lacking)}")
     return [dict(row, intent=float(row["intent"]), execution=float(row["execution"]),
-                 complete=row["complete"] == "1") for row in rows]
+                 complete=row["complete"] == "1", start=row.get("start", ""))
+            for row in rows]
