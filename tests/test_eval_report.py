@@ -88,6 +88,10 @@ def test_two_runs_compare_side_by_side(run, tmp_path, capsys):
     text = comparison([run, other])
     assert "| scene2 | L0 | 100.0 | 0.0 | -100.0 |" in text
     assert "| scene2 | L1 | 0.0 | - | - |" in text
+    # then the paired differences, B - A, over the one episode both runs have
+    assert "## Paired differences (B − A, intervals over tasks)" in text
+    assert "| scene2 | L0 | 0.0 | 100.0 | -100.0 |" in text
+    assert "episode(s) only in" in text
     assert main(["report", str(run), str(other), "--out", str(tmp_path / "c.md")]) == 0
     assert (tmp_path / "c.md").read_text() == text
     assert main(["report", str(run), str(other), str(run)]) == 1

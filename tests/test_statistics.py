@@ -5,6 +5,8 @@ the true value about 95% of the time where the Wilson interval over episodes doe
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -137,3 +139,16 @@ def test_a_cell_whose_tasks_all_agree_gets_the_wilson_interval_over_its_tasks():
     assert intervals["IS"] == wilson(1.0, 16) and intervals["CR"] == wilson(1.0, 16)
     assert intervals["ES"] == wilson(0.5, 16)
     assert task_intervals(episodes[:10])["IS"] is None  # one task: nothing over tasks
+
+
+def test_compare_writes_a_page_with_a_forest_plot_per_metric(tmp_path):
+    a = _run(tmp_path, "better", _records(5, shift=0.05))
+    b = _run(tmp_path, "base", _records(5))
+    out = tmp_path / "out"
+    assert main(["compare", str(a), str(b), "--out", str(out)]) == 0
+    page = (out / "compare.html").read_text()
+    assert page.count("<svg") == 3  # IS, ES, CR
+    assert "95% interval over tasks" in page and "scene1 L0 · 10 tasks" in page
+    result = json.loads((out / "compare.json").read_text())
+    assert result["verdicts"] == compare_runs(a, b)["verdicts"]
+    assert (out / "compare.md").read_text() == markdown(compare_runs(a, b))

@@ -251,13 +251,14 @@ def add_compare(commands) -> None:
     p.add_argument("runs", nargs="+", metavar="RUN", help="RUN_A RUN_B [RUN_C ...]: each "
                    "later run is compared with the first")
     p.add_argument("--json", action="store_true", help="print the comparison as JSON")
-    p.add_argument("--out", metavar="DIR", help="write compare.md and compare.json here (one "
-                   "pair) or DIR/<A>-vs-<B>/ (several)")
+    p.add_argument("--out", metavar="DIR", help="write compare.md, compare.html (with a forest "
+                   "plot per metric) and compare.json here (one pair) or DIR/<A>-vs-<B>/ "
+                   "(several)")
     p.set_defaults(handler=cmd_compare)
 
 
 def cmd_compare(args) -> int:
-    from robofollow.eval.compare import compare_runs, markdown
+    from robofollow.eval.compare import compare_runs, html, markdown
     from robofollow.files import write_json_atomic
 
     runs = [Path(run) for run in args.runs]
@@ -274,8 +275,9 @@ def cmd_compare(args) -> int:
                 out = out / f"{Path(result['a']).name}-vs-{Path(result['b']).name}"
             out.mkdir(parents=True, exist_ok=True)
             (out / "compare.md").write_text(markdown(result), encoding="utf-8")
+            (out / "compare.html").write_text(html(result), encoding="utf-8")
             write_json_atomic(out / "compare.json", result)
-            print(f"wrote {out / 'compare.md'} and compare.json", file=sys.stderr)
+            print(f"wrote {out / 'compare.md'}, compare.html and compare.json", file=sys.stderr)
     if args.json:
         print(json.dumps(results[0] if len(results) == 1 else results, indent=2))
     elif not args.out:

@@ -19,6 +19,7 @@ import numpy as np
 
 from robofollow.compiler.spec import LEVELS
 from robofollow.errors import RoboFollowError
+from robofollow.eval.pages import PAGES, p_value, signed_interval
 from robofollow.eval.run_folder import RESULTS, RUN_FILE, read_results
 from robofollow.eval.scores import SCORES, read_scores
 from robofollow.oracle.intervals import holm, paired_test
@@ -228,14 +229,47 @@ def _signed(value: float) -> str:
     return f"{value:+.1f}"
 
 
-def signed_interval(interval: list[float] | None) -> str:
-    """An interval of a difference as the tables print it."""
-    return "[n/a]" if interval is None else f"[{interval[0]:+.1f}, {interval[1]:+.1f}]"
+_PLOT = {"width": 520, "row": 22, "label": 170, "top": 28}  # a forest plot's geometry (px)
 
 
-def p_value(value: float) -> str:
-    """A p-value as the tables print it."""
-    return f"{value:.3g}" if value >= 0.001 else "< 0.001"
+def forest(result: dict, metric: str) -> dict:
+    """A forest plot of a metric's differences: each row's estimate and interval in pixels,
+    the zero line, and ticks (the SVG in compare.html.j2 draws it)."""
+    rows = result["rows"]
+    values = [0.0] + [v for r in rows for v in [r[metric]["difference"],
+                                                *(r[metric]["interval"] or [])]]
+    low, high = min(values), max(values)
+    pad = max((high - low) * 0.05, 1.0)
+    low, high = low - pad, high + pad
+    step = next(s for s in (1, 2, 5, 10, 20, 25, 50) if (high - low) / s <= 10)
+
+    def x(value: float) -> float:
+        return round(_PLOT["label"] + (value - low) / (high - low) * _PLOT["width"], 1)
+
+    drawn = []
+    for index, row in enumerate(rows):
+        cell = row[metric]
+        bounds = cell["interval"] or [cell["difference"], cell["difference"]]
+        name = f"{row['scene']} {row['level']}".replace("all avg", "average")
+        drawn.append({"label": f"{name} · {row['tasks']} tasks",
+                      "y": _PLOT["top"] + index * _PLOT["row"], "x": x(cell["difference"]),
+                      "low": x(bounds[0]), "high": x(bounds[1]),
+                      "told_apart": cell["p_holm"] < ALPHA,
+                      "title": f"{cell['difference']:+.1f} {signed_interval(cell['interval'])}, "
+                               f"p (Holm) {p_value(cell['p_holm'])}, {row['tasks']} tasks, "
+                               f"{row['episodes']} pairs"})
+    first = step * np.ceil(low / step)
+    ticks = [{"x": x(v), "label": f"{v:+g}" if v else "0"} for v in np.arange(first, high, step)]
+    return {"rows": drawn, "zero": x(0.0), "ticks": ticks, "metric": metric,
+            "height": _PLOT["top"] + len(rows) * _PLOT["row"] + 24,
+            "width": _PLOT["label"] + _PLOT["width"] + 20}
+
+
+def html(result: dict) -> str:
+    """The comparison as a page: verdicts, a forest plot and a table per metric."""
+    return PAGES.get_template("compare.html.j2").render(
+        result=result, a=Path(result["a"]).name, b=Path(result["b"]).name, metrics=METRICS,
+        plots={metric: forest(result, metric) for metric in METRICS})
 
 
 def markdown(result: dict) -> str:

@@ -17,40 +17,17 @@ import re
 from collections import Counter, defaultdict
 from pathlib import Path
 
-import jinja2
 import numpy as np
 
 from robofollow.compiler.spec import LEVELS, MOTION_LEVELS
 from robofollow.errors import RoboFollowError
-from robofollow.eval.compare import control_comparisons, p_value, signed_interval
+from robofollow.eval.compare import CompareError, compare_runs, control_comparisons, markdown
 from robofollow.eval.drops import level_drops
+from robofollow.eval.pages import PAGES
 from robofollow.eval.run_folder import RESULTS, RUN_FILE, read_results
 from robofollow.eval.runner import EvalOptions, summary, with_motion
 from robofollow.oracle.metrics import METRICS, MOTIONS, table
 
-# Every HTML template (`*.html.j2`) escapes what it shows: run records hold text from
-# policies and policy servers (error messages), which must never become markup. No template
-# marks a value |safe.
-_TEMPLATES = jinja2.Environment(
-    loader=jinja2.PackageLoader("robofollow.eval", "templates"),
-    autoescape=jinja2.select_autoescape(["html", "html.j2"], default_for_string=True,
-                                        default=False),
-    trim_blocks=True, lstrip_blocks=True, undefined=jinja2.StrictUndefined)
-
-
-def _interval(bounds: list[float] | None) -> str:
-    """An interval as the reports print it ('n/a': a cell of one task has no task interval)."""
-    return "n/a" if bounds is None else f"{bounds[0]:.1f}–{bounds[1]:.1f}"
-
-
-def _rounds_of(cell: dict) -> str:
-    """Episodes per task in a cell (a whole number when every task ran as often)."""
-    rounds = cell["episodes"] / max(cell["tasks"], 1)
-    return f"{rounds:.0f}" if rounds == int(rounds) else f"{rounds:.1f}"
-
-
-_TEMPLATES.globals.update(interval=_interval, rounds_of=_rounds_of,
-                          signed_interval=signed_interval, p_value=p_value)
 VIDEO_LINK = re.compile(r"videos/[A-Za-z0-9_.#-]+\.mp4")  # what the runner writes
 DID = ("as instructed", "another training task", "other branch", "unrecognised")
 TOP = 15  # confusions and failure reasons listed
@@ -228,7 +205,7 @@ def write_report(run: Path, motions: dict[str, str | None] | None = None) -> tup
                        control_comparisons(run))
     paths = run / "report.md", run / "report.html"
     for path in paths:
-        template = _TEMPLATES.get_template(f"report{path.suffix}.j2")
+        template = PAGES.get_template(f"report{path.suffix}.j2")
         path.write_text(template.render(**data), encoding="utf-8")
     return paths
 
@@ -236,11 +213,19 @@ def write_report(run: Path, motions: dict[str, str | None] | None = None) -> tup
 def comparison(runs: list[Path], motions: list[dict[str, str | None]] | None = None) -> str:
     """Markdown: the runs' Table 1 cells side by side, with B - A differences; under each L1
     and L3 cell, its moved and its as-trained tasks (`motions`, per run, fills in the records
-    written before they carried their task's motion)."""
+    written before they carried their task's motion); then the paired differences B - A with
+    their intervals over tasks and p-values (compare.py), where the runs share episodes."""
     loaded = [load_run(run) for run in runs]
     motions = motions or [{} for _ in runs]
     tables = [table(with_motion(results, found))
               for (_, results), found in zip(loaded, motions, strict=True)]
-    template = _TEMPLATES.get_template("compare.md.j2")
-    return template.render(runs=[run.name for run in runs], options=[o for o, _ in loaded],
-                           tables=tables, metrics=METRICS, levels=LEVELS, motions=MOTIONS)
+    template = PAGES.get_template("compare.md.j2")
+    side_by_side = template.render(runs=[run.name for run in runs],
+                                   options=[o for o, _ in loaded], tables=tables,
+                                   metrics=METRICS, levels=LEVELS, motions=MOTIONS)
+    try:
+        paired = markdown(compare_runs(runs[1], runs[0]))  # B - A, as the Δ columns
+    except CompareError as error:
+        return side_by_side + f"\nPaired differences: not available ({error}).\n"
+    body = paired.split("\n", 1)[1].replace("\n## ", "\n### ")
+    return side_by_side + "\n## Paired differences (B − A, intervals over tasks)\n" + body

@@ -13,6 +13,7 @@ values give the same intervals and p-values.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,11 +38,20 @@ def task_interval(values, weights) -> tuple[float, float] | None:
         return None
     if np.ptp(values) == 0:
         return float(values[0]), float(values[0])
-    result = stats.bootstrap((values, weights), weighted_mean, paired=True, vectorized=True,
-                             n_resamples=RESAMPLES, confidence_level=CONFIDENCE, method="BCa",
-                             rng=np.random.default_rng(SEED))
+    return _bootstrap((values, weights), weighted_mean, paired=True)
+
+
+def _bootstrap(data: tuple, statistic, paired: bool) -> tuple[float, float]:
+    """The BCa interval, or the percentile one where BCa is undefined (a resampling
+    distribution too flat for its acceleration: scipy warns and gives NaN)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        warnings.simplefilter("ignore", stats.DegenerateDataWarning)
+        result = stats.bootstrap(data, statistic, paired=paired, vectorized=True,
+                                 n_resamples=RESAMPLES, confidence_level=CONFIDENCE,
+                                 method="BCa", rng=np.random.default_rng(SEED))
     low, high = result.confidence_interval
-    if not (np.isfinite(low) and np.isfinite(high)):  # BCa undefined: the percentile interval
+    if not (np.isfinite(low) and np.isfinite(high)):
         low, high = np.percentile(result.bootstrap_distribution, [2.5, 97.5])
     return float(low), float(high)
 
@@ -91,13 +101,7 @@ def unpaired_test(first, second) -> PairedTest:
         return PairedTest(estimate, (estimate, estimate), 1.0, len(first) + len(second))
     interval = estimate, estimate  # both sets constant: nothing to resample
     if np.ptp(first) or np.ptp(second):
-        result = stats.bootstrap((first, second), difference, vectorized=True,
-                                 n_resamples=RESAMPLES, confidence_level=CONFIDENCE,
-                                 method="BCa", rng=np.random.default_rng(SEED))
-        low, high = result.confidence_interval
-        if not (np.isfinite(low) and np.isfinite(high)):
-            low, high = np.percentile(result.bootstrap_distribution, [2.5, 97.5])
-        interval = float(low), float(high)
+        interval = _bootstrap((first, second), difference, paired=False)
     test = stats.permutation_test((first, second), difference, vectorized=True,
                                   n_resamples=PERMUTATIONS, rng=np.random.default_rng(SEED))
     return PairedTest(estimate, interval, float(min(test.pvalue, 1.0)), len(first) + len(second))
