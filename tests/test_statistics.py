@@ -152,3 +152,55 @@ def test_compare_writes_a_page_with_a_forest_plot_per_metric(tmp_path):
     result = json.loads((out / "compare.json").read_text())
     assert result["verdicts"] == compare_runs(a, b)["verdicts"]
     assert (out / "compare.md").read_text() == markdown(compare_runs(a, b))
+
+
+def _pilot(tmp_path, name, between, within, tasks=40, rounds=10, seed=0):
+    """A one-level pilot: task means spread by `between`, rounds by `within` (0-1 scale)."""
+    rng = np.random.default_rng(seed)
+    records = []
+    for task in range(tasks):
+        mean = 0.5 + rng.normal(0, between)
+        for round_index in range(1, rounds + 1):
+            value = float(mean + rng.normal(0, within))
+            records.append({"episode": f"scene1/L2/t{task}#r{round_index}", "scene": "scene1",
+                            "level": "L2", "task": f"scene1/L2/t{task}",
+                            "hashes": {"episode": f"h{task}-{round_index}"},
+                            "intent_score": value, "execution_score": value,
+                            "complete": value > 0.5})
+    return _run(tmp_path, name, records)
+
+
+def test_the_power_plan_needs_more_rounds_for_smaller_differences_and_more_tasks_past_a_floor(
+        tmp_path):
+    from robofollow.eval.power import plan
+
+    pilot = _pilot(tmp_path, "pilot", between=0.02, within=0.2)
+    (entry,) = plan([pilot], 10.0)
+    assert entry["tasks"] == 40 and entry["pilot_rounds"] == 10
+    assert 15 < entry["within_sd"] < 25 and entry["between_sd"] < 5
+    (smaller,) = plan([pilot], 5.0)
+    assert smaller["rounds"] > entry["rounds"] >= 1
+    spread = _pilot(tmp_path, "spread", between=0.3, within=0.05)  # tasks differ a lot
+    (far,) = plan([spread], 5.0)
+    assert far["rounds"] is None and far["tasks_needed"] > 40
+
+
+def test_the_planned_rounds_give_about_the_planned_power(tmp_path):
+    """Simulated paired comparisons at the planned rounds detect the planned difference about
+    80% of the time (the sign-flip test over tasks, 5% two-sided)."""
+    from robofollow.eval.power import plan
+
+    rng = np.random.default_rng(11)
+    tasks, between, within, delta = 30, 0.03, 0.25, 0.08
+    (entry,) = plan([_pilot(tmp_path, "pilot", between, within, tasks, 10, seed=3)],
+                    100 * delta)
+    rounds = entry["rounds"]
+    detected = 0
+    simulations = 120
+    for _ in range(simulations):
+        a = rng.normal(0, between, tasks)[:, None] + rng.normal(0, within, (tasks, rounds))
+        b = rng.normal(0, between, tasks)[:, None] + rng.normal(0, within, (tasks, rounds))
+        differences = (a - b).mean(axis=1) + delta
+        detected += paired_test(differences, np.ones(tasks)).p < 0.05
+    assert 0.65 <= detected / simulations <= 0.95, (rounds, detected)
+    assert rounds > 1

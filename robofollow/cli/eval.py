@@ -250,6 +250,12 @@ def add_compare(commands) -> None:
                "docs/results/baselines/scene2-blind")
     p.add_argument("runs", nargs="+", metavar="RUN", help="RUN_A RUN_B [RUN_C ...]: each "
                    "later run is compared with the first")
+    p.add_argument("--power", type=float, metavar="DELTA",
+                   help="plan instead of compare: the rounds per task needed to tell apart a "
+                        "difference of DELTA points at each level (80%% power), from one pilot "
+                        "run's variance or, better, from two pilot runs' paired differences")
+    p.add_argument("--metric", choices=("IS", "ES", "CR"), default="IS",
+                   help="with --power: the metric planned for (default: IS)")
     p.add_argument("--json", action="store_true", help="print the comparison as JSON")
     p.add_argument("--out", metavar="DIR", help="write compare.md, compare.html (with a forest "
                    "plot per metric) and compare.json here (one pair) or DIR/<A>-vs-<B>/ "
@@ -262,8 +268,11 @@ def cmd_compare(args) -> int:
     from robofollow.files import write_json_atomic
 
     runs = [Path(run) for run in args.runs]
+    if args.power is not None:
+        return _plan(runs, args)
     if len(runs) < 2:
-        raise RoboFollowError("compare takes at least two runs: RUN_A RUN_B [RUN_C ...]")
+        raise RoboFollowError("compare takes at least two runs: RUN_A RUN_B [RUN_C ...] (or "
+                              "one or two pilot runs with --power DELTA)")
     results = [compare_runs(runs[0], other) for other in runs[1:]]
     for result in results:
         for warning in result["warnings"]:
@@ -282,6 +291,21 @@ def cmd_compare(args) -> int:
         print(json.dumps(results[0] if len(results) == 1 else results, indent=2))
     elif not args.out:
         print("\n".join(markdown(result) for result in results))
+    return 0
+
+
+def _plan(runs: list[Path], args) -> int:
+    from robofollow.eval.power import plan, plan_markdown
+
+    if len(runs) > 2:
+        raise RoboFollowError("--power plans from one pilot run, or two (their paired "
+                              "differences)")
+    if args.power <= 0:
+        raise RoboFollowError(f"--power {args.power:g}: the difference to detect, in points, "
+                              "is positive")
+    entries = plan(runs, args.power, args.metric)
+    print(json.dumps(entries, indent=2) if args.json else
+          plan_markdown(runs, args.power, args.metric, entries))
     return 0
 
 
