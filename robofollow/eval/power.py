@@ -83,13 +83,14 @@ def plan(runs: list[Path], delta: float, metric: str = "IS", power: float = 0.8,
 
 
 def plan_markdown(runs: list[Path], delta: float, metric: str, entries: list[dict]) -> str:
+    """The plan as a markdown table."""
     pilot = (f"{runs[0].name} as the pilot; a paired difference taken to vary like one "
              "policy's scores twice over" if len(runs) == 1 else
              f"the paired differences {runs[0].name} − {runs[1].name} as the pilot")
     lines = [f"# Rounds per task to tell apart {delta:g} points of {metric}", "",
              f"80% power, 5% two-sided split over the levels; {pilot} (docs/statistics.md).", "",
-             "| Level | tasks | pilot rounds | SD between tasks | SD within a task | rounds "
-             "per task needed |", "|---|---:|---:|---:|---:|---|"]
+             ("| Level | tasks | pilot rounds | SD between tasks | SD within a task | rounds "
+              "per task needed |"), "|---|---:|---:|---:|---:|---|"]
     for e in entries:
         if e["rounds"] is not None:
             needed = str(e["rounds"])
