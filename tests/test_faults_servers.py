@@ -576,16 +576,17 @@ def test_report_html_escapes_error_texts_policy_names_and_reasons(tmp_path):
 
 
 def test_every_html_template_autoescapes_and_none_marks_a_value_safe():
-    from robofollow.eval.report import _TEMPLATES
+    from robofollow.eval.pages import PAGES
 
     package = Path(__file__).parents[1] / "robofollow"
     html = [path for path in package.rglob("*.j2") if ".html" in path.name]
     assert html  # report.html.j2 at least
     for path in html:
         assert path.parent.name == "templates" and path.parent.parent.name == "eval", path
-        assert _TEMPLATES.autoescape(path.name) is True
+        assert PAGES.autoescape(path.name) is True
         assert not re.search(r"\|\s*safe|Markup|autoescape\s+false", path.read_text()), path
-    assert "Markup" not in (package / "eval" / "report.py").read_text()
+    for module in ("report.py", "compare.py", "pages.py"):
+        assert "Markup" not in (package / "eval" / module).read_text(), module
 
 
 # -- privileged observations ---------------------------------------------------------------

@@ -204,3 +204,12 @@ def test_the_planned_rounds_give_about_the_planned_power(tmp_path):
         detected += paired_test(differences, np.ones(tasks)).p < 0.05
     assert 0.65 <= detected / simulations <= 0.95, (rounds, detected)
     assert rounds > 1
+
+
+def test_a_comparison_page_escapes_the_run_names(tmp_path):
+    a = _run(tmp_path, "<script>alert(1)", _records(6, shift=0.05))
+    b = _run(tmp_path, "base", _records(6))
+    out = tmp_path / "out"
+    assert main(["compare", str(a), str(b), "--out", str(out)]) == 0
+    page = (out / "compare.html").read_text()
+    assert "<script>" not in page and "&lt;script&gt;alert(1)" in page
