@@ -26,7 +26,7 @@ from robofollow.oracle.intervals import holm, paired_test
 from robofollow.oracle.metrics import METRICS
 
 ALPHA = 0.05
-_FIELDS = {"IS": "intent", "ES": "execution", "CR": "complete"}
+FIELDS = {"IS": "intent", "ES": "execution", "CR": "complete"}  # each metric in run_scores
 NAMED = 5  # unpaired or mismatched episodes named in a warning
 
 
@@ -114,7 +114,7 @@ def _task_differences(pairs: list[tuple[dict, dict]]) -> dict[str, dict]:
     tasks = {}
     for task, group in grouped.items():
         entry = {"cell": (group[0][0]["scene"], group[0][0]["level"]), "episodes": len(group)}
-        for metric, name in _FIELDS.items():
+        for metric, name in FIELDS.items():
             a = np.mean([float(x[name]) for x, _ in group])
             b = np.mean([float(y[name]) for _, y in group])
             entry[metric] = (a, b)

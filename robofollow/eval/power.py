@@ -28,9 +28,8 @@ import numpy as np
 from scipy import stats
 
 from robofollow.compiler.spec import LEVELS
-from robofollow.eval.compare import pair, run_scores
+from robofollow.eval.compare import FIELDS, pair, run_scores
 
-FIELDS = {"IS": "intent", "ES": "execution", "CR": "complete"}
 MAX_ROUNDS = 1000  # a plan beyond this many rounds per task is reported as out of reach
 
 
