@@ -253,3 +253,20 @@ def test_the_report_command_takes_the_motion_of_older_records_from_the_compiled_
     assert main(["report", str(run), "--specs", str(specs)]) == 0
     assert ("| scene1 | L1 | 50.0 | 50.0 | 50.0 | 2 | 0.0 | 0.0 | 0.0 | 1 | 100.0 | 100.0 "
             "| 100.0 | 1 |") in (run / "report.md").read_text()
+
+
+def test_the_drop_from_l0_skips_an_l1_that_pairs_with_no_l0_task():
+    from robofollow.eval.drops import level_drops
+
+    def record(task, level, score):
+        return {"scene": "scene2", "level": level, "task": f"scene2/{level}/{task}",
+                "intent_score": score, "execution_score": score, "complete": score > 0.5}
+
+    results = [record("a", "L0", 1.0), record("b", "L0", 1.0), record("c@x", "L1", 0.0),
+               record("n1", "L2", 0.0), record("n2", "L2", 0.5)]
+    rows = level_drops(results)
+    assert [(r["level"], r["paired"]) for r in rows] == [("L2", False)]
+    assert rows[0]["IS"]["drop"] == 75.0
+    paired = level_drops(results + [record("a@x", "L1", 0.25)])
+    assert paired[0]["level"] == "L1" and paired[0]["tasks"] == (1, 1)
+    assert paired[0]["IS"]["drop"] == 75.0

@@ -74,6 +74,11 @@ def add_eval(commands) -> None:
                         "RUN/controls/<mode> with its own summary: empty (no instruction) "
                         "and/or shuffled (another task's); the report adds the language "
                         "effect (instructed - control) with paired intervals over tasks")
+    p.add_argument("--until-separated", metavar="RUN_B",
+                   help="add rounds one at a time (up to --rounds) and stop once the run's "
+                        "average Intent is told apart from RUN_B's on the same episodes "
+                        "(paired sign-flip test over tasks at 0.05 / --rounds after each "
+                        "round; RUN/sequential.json says where it stopped)")
     p.add_argument("--video", choices=VIDEO_MODES, default="none",
                    help="write mp4s of these episodes to RUN/videos (default: none)")
     p.add_argument("--policy-timeout", type=seconds, metavar="S",
@@ -115,6 +120,9 @@ def cmd_eval(args) -> int:
                               "its own: --policy URL?timeout=S&retries=N")
     if args.shard:
         shard_of(args.shard)  # said before anything runs
+        if args.until_separated:
+            raise RoboFollowError("--until-separated decides when a whole run stops; a shard "
+                                  "is a part of one (run it without --shard)")
     controls = _names(args.controls, [m for m in INSTRUCTION_MODES if m != "normal"],
                       "control arm") if args.controls else []
     if args.instruction_mode in controls:
@@ -131,8 +139,11 @@ def cmd_eval(args) -> int:
         (Path(args.out) / CONTROLS / mode, replace(options, instruction_mode=mode))
         for mode in controls]
     try:
+        if args.until_separated:
+            result, stopped = _until_separated(compiled, options, args)
+            arms = [(out, replace(arm, rounds=stopped)) for out, arm in arms[1:]]
         for out, arm in arms:
-            if arm is not options:
+            if arm.instruction_mode != options.instruction_mode:
                 print(f"control arm: {arm.instruction_mode} instructions, {out}",
                       file=sys.stderr)
             outcome = evaluate(compiled, out, arm, args.workers, args.resume,
@@ -160,6 +171,32 @@ def cmd_eval(args) -> int:
         print("\n".join(f"  {line}" for line in control["verdicts"]))
     print(f"report: {markdown} (and .html)")
     return 3 if failures else 0
+
+
+def _until_separated(compiled, options, args) -> tuple[dict, int]:
+    """Rounds one at a time until the declared test separates the run from the other
+    (sequential.py); the summary and the last round run."""
+    from robofollow.eval.compare import run_scores
+    from robofollow.eval.runner import evaluate
+    from robofollow.eval.sequential import SEQUENTIAL, look, record
+    from robofollow.files import write_json_atomic
+
+    other = Path(args.until_separated)
+    run_scores(other)  # a run with episodes, said before anything runs
+    out = Path(args.out)
+    for round_index in range(1, options.rounds + 1):
+        result = evaluate(compiled, out, options, args.workers,
+                          args.resume or round_index > 1, progress=not args.quiet,
+                          executor=args.executor, drop_corrupt=args.drop_corrupt,
+                          up_to_round=round_index)
+        taken = look(out, other, round_index, options.rounds)
+        print(f"after round {round_index}: average Intent {taken.difference:+.1f} against "
+              f"{other.name}, p = {taken.p:.3g} (separated below {taken.threshold:.3g})",
+              file=sys.stderr)
+        if taken.separated:
+            break
+    write_json_atomic(out / SEQUENTIAL, record(taken, other, options.rounds))
+    return result, taken.round
 
 
 def _names(text: str | None, known: list[str], what: str) -> list[str]:

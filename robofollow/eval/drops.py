@@ -44,6 +44,8 @@ def level_drops(results: list[dict]) -> list[dict]:
             later = means.get((scene, level))
             if not base or not later:
                 continue
+            if level == "L1" and not {origin(t) for t in base} & {origin(t) for t in later}:
+                continue  # a sample whose L1 tasks come from none of its L0 tasks
             row = {"scene": scene, "level": level, "paired": level == "L1"}
             for metric in METRICS:
                 row[metric], row["tasks"] = _drop(base, later, metric, paired=level == "L1")

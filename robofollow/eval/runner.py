@@ -303,17 +303,20 @@ def failures_text(result: dict) -> str | None:
 
 def evaluate(compiled: Episodes, out: Path, options: EvalOptions, workers: int = 1,
              resume: bool = False, progress: bool = True, executor: str = "process",
-             drop_corrupt: bool = False, isolate: bool | None = None) -> dict:
+             drop_corrupt: bool = False, isolate: bool | None = None,
+             up_to_round: int | None = None) -> dict:
     """Run (or finish) the evaluation; returns the summary (also written to summary.json).
     `drop_corrupt`: move corrupt lines of a resumed run aside (else they stop it);
     `isolate`: run the policy in worker processes even with one worker (default: for
-    policies that are not RoboFollow's own)."""
+    policies that are not RoboFollow's own); `up_to_round`: run only the rounds up to this
+    one for now (a sequential comparison adds rounds one at a time)."""
     if options.spec_digest != compiled.spec.digest:
         raise EvalRunError("the options' spec digest is not the compiled specs' digest")
     check_out(out)
     with run_lock(out):
         prepare(out, options.to_json(), resume)
-        episodes = select_episodes(compiled, options)
+        episodes = [e for e in select_episodes(compiled, options)
+                    if up_to_round is None or e.round <= up_to_round]
         results_path = out / RESULTS
         finished = (drop_corrupt_lines if drop_corrupt else read_results)(results_path)
         done = {r["episode"] for r in finished}
