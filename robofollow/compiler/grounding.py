@@ -85,7 +85,7 @@ class Grounder:
             cached = self._still.get(id(ref))
             if cached is None or cached[0] is not ref:
                 cached = (ref, tuple(self._find(ref)))
-                if all(isinstance(c, _STILL) for c in ref.constraints):
+                if _reads_no_position(ref):
                     self._still[id(ref)] = cached
             self._referents[id(ref)] = cached
         return list(cached[1])
@@ -288,6 +288,11 @@ class Unstable:
 _STILL = (lf.ColorIs, lf.NotKind, lf.SizeIs)  # constraints that read no position
 
 
+def _reads_no_position(ref: lf.Ref) -> bool:
+    """Whether a description picks the same bodies wherever the bodies stand."""
+    return all(isinstance(c, _STILL) for c in ref.constraints)
+
+
 def position_reads(node, grounder: Grounder) -> set[str]:
     """The bodies whose positions can change what `node` (a form or a part of one) picks out:
     the candidates and landmarks of each description that relates or compares positions (every
@@ -299,7 +304,7 @@ def position_reads(node, grounder: Grounder) -> set[str]:
     elif isinstance(node, lf.Holds) and not isinstance(node.property, _STILL):
         found |= set(grounder.world.bodies)
     elif isinstance(node, BaseModel):
-        if isinstance(node, lf.Ref) and not all(isinstance(c, _STILL) for c in node.constraints):
+        if isinstance(node, lf.Ref) and not _reads_no_position(node):
             found.update(_eligible(node, grounder))
             for constraint in node.constraints:
                 for landmark in _landmarks(constraint):

@@ -29,8 +29,8 @@ from robofollow.compiler.spec import Level, Scene, Spec
 from robofollow.compiler.task_rules import TaskRules, arms_of
 from robofollow.compiler.wordings import GENERATORS, Describer, concepts
 
-MOVED_LEVELS = ("L1", "L3")
-_STYLES = sorted(STYLES)  # levels whose tasks say whether the referent's motion moved
+MOVED_LEVELS = ("L1", "L3")  # levels whose tasks say whether the referent's motion moved
+_STYLES = sorted(STYLES)
 
 
 class TestTask(Model):
