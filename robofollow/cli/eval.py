@@ -155,8 +155,9 @@ def cmd_eval(args) -> int:
                 write_report(out)
     except KeyboardInterrupt:
         return interrupted("episodes", args.out)
+    effects = control_comparisons(Path(args.out))
     try:
-        markdown, _ = write_report(Path(args.out))
+        markdown, _ = write_report(Path(args.out), controls=effects)
     except OSError as error:
         raise RoboFollowError(f"cannot write the report in {args.out}: "
                               f"{error.strerror or error} (the results are kept; "
@@ -166,7 +167,7 @@ def cmd_eval(args) -> int:
     failures = failures_text(result)
     if failures:
         print(failures)
-    for control in control_comparisons(Path(args.out)):
+    for control in effects:
         print(f"language effect, instructed - {control['mode']} instructions (Intent):")
         print("\n".join(f"  {line}" for line in control["verdicts"]))
     print(f"report: {markdown} (and .html)")

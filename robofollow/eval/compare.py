@@ -27,7 +27,7 @@ from robofollow.oracle.metrics import METRICS
 
 ALPHA = 0.05
 FIELDS = {"IS": "intent", "ES": "execution", "CR": "complete"}  # each metric in run_scores
-NAMED = 5  # unpaired or mismatched episodes named in a warning
+NAMED = 5  # episodes named in a warning or an error
 
 
 class CompareError(RoboFollowError):
@@ -81,9 +81,7 @@ class Pairing:
                                                    "start tolerance (their start hashes "
                                                    "differ)"))):
             if episodes:
-                named = ", ".join(episodes[:NAMED]) + (
-                    f" and {len(episodes) - NAMED} more" if len(episodes) > NAMED else "")
-                found.append(f"{len(episodes)} episode(s) {what}, left out: {named}")
+                found.append(f"{len(episodes)} episode(s) {what}, left out: {named(episodes)}")
         return found
 
 
@@ -136,12 +134,10 @@ def _row(label: dict, tasks: list[dict], cells: dict[tuple, float]) -> dict:
         a = np.array([t[metric][0] for t in tasks])
         b = np.array([t[metric][1] for t in tasks])
         test = paired_test(a - b, weights)
+        difference, interval = test.in_points()
         row[metric] = {"A": 100 * float(np.average(a, weights=weights)),
                        "B": 100 * float(np.average(b, weights=weights)),
-                       "difference": 100 * test.estimate,
-                       "interval": None if test.interval is None else
-                       [100 * test.interval[0], 100 * test.interval[1]],
-                       "p": test.p}
+                       "difference": difference, "interval": interval, "p": test.p}
     return row
 
 
@@ -168,9 +164,7 @@ def compare_runs(a: Path, b: Path, names: tuple[str, str] | None = None) -> dict
     if len(cells) > 1:
         rows.append(_row({"scene": "all", "level": "avg"}, list(tasks.values()),
                          {c: 1.0 / len(cells) for c in cells}))
-    for metric in METRICS:
-        for row, adjusted in zip(rows, holm([r[metric]["p"] for r in rows]), strict=True):
-            row[metric]["p_holm"] = adjusted
+    with_holm(rows)
     return {"a": str(a), "b": str(b),
             "pairing": {"pairs": len(pairing.pairs), "only_a": len(pairing.only_a),
                         "only_b": len(pairing.only_b),
@@ -178,6 +172,20 @@ def compare_runs(a: Path, b: Path, names: tuple[str, str] | None = None) -> dict
                         "other_start": len(pairing.other_start)},
             "warnings": pairing.warnings(first, second), "rows": rows,
             "verdicts": [verdict(row, first, second) for row in _headline(rows)]}
+
+
+def with_holm(rows: list[dict]) -> list[dict]:
+    """The rows, each metric's p-value adjusted by Holm's method over the rows ("p_holm")."""
+    for metric in METRICS:
+        for row, adjusted in zip(rows, holm([r[metric]["p"] for r in rows]), strict=True):
+            row[metric]["p_holm"] = adjusted
+    return rows
+
+
+def named(items: list[str]) -> str:
+    """The first NAMED items, and how many more."""
+    more = f" and {len(items) - NAMED} more" if len(items) > NAMED else ""
+    return ", ".join(items[:NAMED]) + more
 
 
 def _headline(rows: list[dict]) -> list[dict]:

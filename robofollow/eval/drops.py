@@ -15,10 +15,9 @@ from collections import defaultdict
 
 import numpy as np
 
-from robofollow.oracle.intervals import holm, paired_test, unpaired_test
-from robofollow.oracle.metrics import METRICS
-
-_FIELDS = {"IS": "intent_score", "ES": "execution_score", "CR": "complete"}
+from robofollow.eval.compare import with_holm
+from robofollow.oracle.intervals import paired_test, unpaired_test
+from robofollow.oracle.metrics import METRICS, RECORD_FIELDS
 
 
 def origin(task_id: str) -> str:
@@ -36,7 +35,7 @@ def level_drops(results: list[dict]) -> list[dict]:
         grouped[record["scene"], record["level"], record["task"]].append(record)
     for (scene, level, task), records in grouped.items():
         means[scene, level][task] = {m: float(np.mean([float(r[f]) for r in records]))
-                                     for m, f in _FIELDS.items()}
+                                     for m, f in RECORD_FIELDS.items()}
     rows = []
     for scene in sorted({scene for scene, _ in means}):
         base = means.get((scene, "L0"))
@@ -50,10 +49,7 @@ def level_drops(results: list[dict]) -> list[dict]:
             for metric in METRICS:
                 row[metric], row["tasks"] = _drop(base, later, metric, paired=level == "L1")
             rows.append(row)
-    for metric in METRICS:
-        for row, adjusted in zip(rows, holm([r[metric]["p"] for r in rows]), strict=True):
-            row[metric]["p_holm"] = adjusted
-    return rows
+    return with_holm(rows)
 
 
 def _drop(base: dict[str, dict], later: dict[str, dict], metric: str,
@@ -77,9 +73,7 @@ def _drop(base: dict[str, dict], later: dict[str, dict], metric: str,
         weights = None
         test = unpaired_test(first, second)
         counts = len(first), len(second)
+    drop, interval = test.in_points()
     return {"L0": 100 * float(np.average(first, weights=weights)),
             "level": 100 * float(np.average(second, weights=weights)),
-            "drop": 100 * test.estimate,
-            "interval": None if test.interval is None else [100 * test.interval[0],
-                                                            100 * test.interval[1]],
-            "p": test.p}, counts
+            "drop": drop, "interval": interval, "p": test.p}, counts

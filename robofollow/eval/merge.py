@@ -11,35 +11,29 @@ from pathlib import Path
 
 from robofollow.compiled_cache import Episodes
 from robofollow.errors import RoboFollowError
+from robofollow.eval.compare import named
 from robofollow.eval.report import load_run, write_report
 from robofollow.eval.run_folder import RESULTS, SUMMARY, check_out, prepare, run_lock
 from robofollow.eval.runner import EvalOptions, select_episodes, shard_of, summary, with_motion
 from robofollow.eval.scores import SCORES, write_scores
 from robofollow.files import json_line, write_json_atomic
 
-NAMED = 5  # episodes named in an error
-
 
 class MergeError(RoboFollowError):
     """Shards that do not make one run."""
 
 
-def _named(episodes: list[str]) -> str:
-    more = f" and {len(episodes) - NAMED} more" if len(episodes) > NAMED else ""
-    return ", ".join(episodes[:NAMED]) + more
-
-
 def _whole(shards: list[Path], loaded: list[tuple[EvalOptions, list[dict]]]) -> EvalOptions:
     """The options of the run the shards are parts of, once they are checked to be its N
     parts."""
-    first = loaded[0][0]
+    whole = replace(loaded[0][0], shard=None)
     parts = []
     for shard, (options, _) in zip(shards, loaded, strict=True):
         if options.shard is None:
             raise MergeError(f"{shard} is a whole run, not a shard (eval --shard I/N makes one)")
-        if replace(options, shard=None) != replace(first, shard=None):
-            differ = [k for k, v in replace(options, shard=None).to_json().items()
-                      if replace(first, shard=None).to_json().get(k) != v]
+        if replace(options, shard=None) != whole:
+            theirs = replace(options, shard=None).to_json()
+            differ = [k for k, v in whole.to_json().items() if theirs.get(k) != v]
             raise MergeError(f"{shard} was run with other options than {shards[0]} "
                              f"({', '.join(differ)} differ): shards of one run share them")
         parts.append(shard_of(options.shard))
@@ -51,13 +45,11 @@ def _whole(shards: list[Path], loaded: list[tuple[EvalOptions, list[dict]]]) -> 
     seen = Counter(index for index, _ in parts)
     doubled = sorted(i for i, n in seen.items() if n > 1)
     missing = sorted(set(range(1, count + 1)) - set(seen))
-    if doubled or missing:
-        raise MergeError("the shards are not the run's parts once each: "
-                         + "; ".join(([f"missing {', '.join(f'{i}/{count}' for i in missing)}"]
-                                      if missing else [])
-                                     + ([f"doubled {', '.join(f'{i}/{count}' for i in doubled)}"]
-                                        if doubled else [])))
-    return replace(first, shard=None)
+    problems = [f"{what} {', '.join(f'{i}/{count}' for i in found)}"
+                for found, what in ((missing, "missing"), (doubled, "doubled")) if found]
+    if problems:
+        raise MergeError("the shards are not the run's parts once each: " + "; ".join(problems))
+    return whole
 
 
 def merge(benchmark: Episodes, shards: list[Path], out: Path) -> dict:
@@ -74,7 +66,7 @@ def merge(benchmark: Episodes, shards: list[Path], out: Path) -> dict:
     missing = [e for e in expected if not seen[e]]
     doubled = sorted(e for e, n in seen.items() if n > 1)
     foreign = sorted(set(seen) - set(expected))
-    problems = [f"{len(found)} episode(s) {what}: {_named(found)}" for found, what in
+    problems = [f"{len(found)} episode(s) {what}: {named(found)}" for found, what in
                 ((missing, "missing (an unfinished shard? finish it with eval --resume)"),
                  (doubled, "in more than one shard"), (foreign, "not of this run"))
                 if found]

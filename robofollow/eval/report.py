@@ -196,13 +196,15 @@ def _group(results: list[dict], *keys: str) -> dict:
     return grouped
 
 
-def write_report(run: Path, motions: dict[str, str | None] | None = None) -> tuple[Path, Path]:
+def write_report(run: Path, motions: dict[str, str | None] | None = None,
+                 controls: list[dict] | None = None) -> tuple[Path, Path]:
     """(Re)build RUN/report.md and RUN/report.html from the run's results; `motions` (the
     compiled episodes' motion, by episode id) fills in the records written before they carried
-    it (else their motion is unknown: "-")."""
+    it (else their motion is unknown: "-"); `controls`: the run against its control arms
+    where the caller has them (else compared here)."""
     options, results = load_run(run)
     data = report_data(run.name, options, with_motion(results, motions or {}),
-                       control_comparisons(run))
+                       control_comparisons(run) if controls is None else controls)
     paths = run / "report.md", run / "report.html"
     for path in paths:
         template = PAGES.get_template(f"report{path.suffix}.j2")

@@ -57,7 +57,7 @@ def _bootstrap(data: tuple, statistic, paired: bool) -> tuple[float, float]:
 
 
 @dataclass(frozen=True)
-class PairedTest:
+class Difference:
     """A difference over tasks: its estimate, 95% interval (None: too few tasks to say) and
     two-sided p-value."""
     estimate: float
@@ -65,15 +65,21 @@ class PairedTest:
     p: float
     tasks: int
 
+    def in_points(self) -> tuple[float, list[float] | None]:
+        """The estimate and the interval on the 0-100 scale."""
+        interval = None if self.interval is None else [100 * v for v in self.interval]
+        return 100 * self.estimate, interval
 
-def paired_test(differences, weights) -> PairedTest:
+
+def paired_test(differences, weights) -> Difference:
     """The weighted mean of per-task differences (A - B), its cluster-bootstrap interval and
     the sign-flip permutation p-value of 'no difference' (every task's difference as likely
     negated; 1 for a single task, which cannot be tested)."""
     differences, weights = np.asarray(differences, float), np.asarray(weights, float)
     estimate = float(weighted_mean(differences, weights))
+    interval = task_interval(differences, weights)
     if len(differences) < 2 or not np.any(differences):  # one task cannot be tested
-        return PairedTest(estimate, task_interval(differences, weights), 1.0, len(differences))
+        return Difference(estimate, interval, 1.0, len(differences))
 
     def statistic(flipped, axis=-1):
         return weighted_mean(flipped, weights, axis)
@@ -81,11 +87,10 @@ def paired_test(differences, weights) -> PairedTest:
     test = stats.permutation_test((differences,), statistic, permutation_type="samples",
                                   vectorized=True, n_resamples=PERMUTATIONS,
                                   rng=np.random.default_rng(SEED))
-    return PairedTest(estimate, task_interval(differences, weights), float(min(test.pvalue, 1.0)),
-                      len(differences))
+    return Difference(estimate, interval, float(min(test.pvalue, 1.0)), len(differences))
 
 
-def unpaired_test(first, second) -> PairedTest:
+def unpaired_test(first, second) -> Difference:
     """mean(first) - mean(second) over two sets of tasks that do not pair (each task's value
     counts once): a BCa bootstrap resampling each set's tasks apart, and the permutation
     p-value of 'the two sets are alike' (task values shuffled between them)."""
@@ -96,15 +101,15 @@ def unpaired_test(first, second) -> PairedTest:
         return x.mean(axis) - y.mean(axis)
 
     if len(first) < 2 or len(second) < 2:
-        return PairedTest(estimate, None, 1.0, len(first) + len(second))
+        return Difference(estimate, None, 1.0, len(first) + len(second))
     if np.ptp(np.concatenate([first, second])) == 0:
-        return PairedTest(estimate, (estimate, estimate), 1.0, len(first) + len(second))
+        return Difference(estimate, (estimate, estimate), 1.0, len(first) + len(second))
     interval = estimate, estimate  # both sets constant: nothing to resample
     if np.ptp(first) or np.ptp(second):
         interval = _bootstrap((first, second), difference, paired=False)
     test = stats.permutation_test((first, second), difference, vectorized=True,
                                   n_resamples=PERMUTATIONS, rng=np.random.default_rng(SEED))
-    return PairedTest(estimate, interval, float(min(test.pvalue, 1.0)), len(first) + len(second))
+    return Difference(estimate, interval, float(min(test.pvalue, 1.0)), len(first) + len(second))
 
 
 def holm(p_values: list[float]) -> list[float]:

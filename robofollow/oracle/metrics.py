@@ -34,6 +34,7 @@ from robofollow.compiler.spec import MOTION_LEVELS
 from robofollow.oracle.intervals import task_interval
 
 METRICS = ("IS", "ES", "CR")
+RECORD_FIELDS = {"IS": "intent_score", "ES": "execution_score", "CR": "complete"}  # per episode
 MOTIONS = ("moved", "as-trained")  # an L1 / L3 task's motion, against its training task's
 REFERENCES = ("chance_IS", "chance_CR", "followed_IS")  # when the episodes carry them
 
@@ -78,14 +79,11 @@ def task_intervals(episodes: list[Mapping]) -> dict[str, list[float] | None]:
     tasks: dict[str, list[Mapping]] = defaultdict(list)
     for e in episodes:
         tasks[e["task"]].append(e)
-    counts = [len(group) for group in tasks.values()]
-    values = {"IS": ([np.mean([e["intent_score"] for e in g]) for g in tasks.values()], counts),
-              "ES": ([np.mean([e["execution_score"] for e in g]) for g in tasks.values()],
-                     counts),
-              "CR": ([np.mean([bool(e["complete"]) for e in g]) for g in tasks.values()],
-                     [1] * len(tasks))}
     found = {}
-    for metric, (means, weights) in values.items():
+    for metric, field in RECORD_FIELDS.items():
+        means = [np.mean([float(e[field]) for e in group]) for group in tasks.values()]
+        # IS and ES are episode means (a task weighs its episodes), CR a task average
+        weights = [1 if metric == "CR" else len(group) for group in tasks.values()]
         interval = task_interval(means, weights)
         if interval is None:
             found[metric] = None
