@@ -8,7 +8,9 @@ from pathlib import Path
 import pytest
 
 from robofollow.cli import main
-from robofollow.eval.report import ReportError, comparison, report_data, write_report
+from robofollow.eval.report import compare_reports, comparison_markdown, write_report
+from robofollow.eval.report_data import report_data
+from robofollow.eval.saved_run import RunReadError
 from tests.report_helpers import OPTIONS, fake_record
 
 RESULTS = [
@@ -36,7 +38,9 @@ def test_report_data_counts_what_the_policy_did_and_where_it_failed_first():
     assert data["cells"]["scene2"]["L0"]["ES"] == 50.0
     assert data["did"]["scene2"]["L1"] == {"completed": 0.0, "as instructed": 0.0,
                                            "another training task": 50.0,
-                                           "other branch": 0.0, "unrecognised": 50.0}
+                                           "other branch": 0.0, "nothing moved": 0.0,
+                                           "moved but touched nothing": 0.0,
+                                           "handled objects in no trained way": 50.0}
     assert data["did"]["scene2"]["L0"]["completed"] == 50.0
     assert data["confusions"] == [(("scene2/L1/pickup_right_cube", "pickup_left_cube"), 1)]
     [source] = data["first_failures"]
@@ -54,17 +58,22 @@ def test_the_report_files_show_table_gap_confusions_and_reasons(run):
     assert "| L1 · Use your left arm to pickup right cube. | pickup_left_cube | 1 |" in text
     assert "the cube slipped (1)" in text
     page = html.read_text()
-    assert page.startswith("<!doctype html>") and "<h3>scene2</h3>" in page
+    assert page.startswith("<!doctype html>") and "tasks.html" in page
     assert "background: rgb(105, 255, 105)" in page  # IS 100 shaded
+    assert "<h3>scene2</h3>" in (run / "tasks.html").read_text()  # the matrices
 
 
 def test_clipped_actions_are_counted_and_shown_only_when_there_are_some(run):
     assert "joint limits" not in write_report(run)[0].read_text()
     lines = [dict(r, clipped=c) for r, c in zip(RESULTS, (0, 12, 3, 0), strict=True)]
     (run / "episodes.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines))
-    assert report_data("mine", OPTIONS, lines)["clipped"] == {"actions": 15, "episodes": 2}
+    lines = [dict(r, steps=100) for r in lines]
+    (run / "episodes.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines))
+    said = ("15 actions (3.8% of the 400 actions executed) in 2 of 4 episodes (50%) asked for "
+            "a joint past its limit")
+    assert report_data("mine", OPTIONS, lines)["clipping"].startswith(said)
     markdown, html = write_report(run)
-    assert "15 actions in 2 episodes asked for a joint past its limit" in markdown.read_text()
+    assert said in " ".join(markdown.read_text().split())
     assert "<h2>Targets past the joint limits</h2>" in html.read_text()
 
 
@@ -73,10 +82,12 @@ def test_records_with_references_read_intent_against_chance(run):
     (run / "episodes.jsonl").write_text("".join(json.dumps(r) + "\n" for r in lines))
     markdown, html = write_report(run)
     assert "| scene2 | L0 | 100.0 | 25.0 | 12.5 | 50.0 |" in markdown.read_text()
-    assert "<td>scene2</td><td>L1</td><td>0.0</td><td>25.0</td><td>12.5</td><td>50.0</td>" in (
-        html.read_text())
+    page = html.read_text()
+    assert "<th>ch.</th>" in page and '<td class="note">25.0</td>' in page  # in Table 1
+    assert 'class="below"' not in page  # no cell below chance
     (run / "episodes.jsonl").write_text("".join(json.dumps(r) + "\n" for r in RESULTS))
-    assert "chance" not in write_report(run)[0].read_text()  # records without references
+    text = write_report(run)[0].read_text()  # records without references
+    assert "Reading Intent against chance" not in text and "chance IS" not in text
 
 
 def test_two_runs_compare_side_by_side(run, tmp_path, capsys):
@@ -85,21 +96,28 @@ def test_two_runs_compare_side_by_side(run, tmp_path, capsys):
     (other / "run.json").write_text(json.dumps(OPTIONS.to_json()))
     (other / "episodes.jsonl").write_text(json.dumps(
         fake_record("pickup_left_cube", "L0", 0.0, 0.0, False, None)) + "\n")
-    text = comparison([run, other])
+    found = compare_reports([run, other])
+    text = comparison_markdown(found)
+    # the cells of the one episode both runs hold; the others left out, said
     assert "| scene2 | L0 | 100.0 | 0.0 | -100.0 |" in text
-    assert "| scene2 | L1 | 0.0 | - | - |" in text
+    assert "| scene2 | L1 |" not in text
+    assert found.warnings == [
+        (f"{run} holds 3 episode(s) that another run lacks, left out: "
+         "scene2/L0/pickup_right_cube#r1, scene2/L1/pickup_right_cube#r1, "
+         "scene2/L1/push_left_cube#r1"), "compared on the 1 episodes every run holds"]
     # then the paired differences, B - A, over the one episode both runs have
-    assert "## Paired differences (B − A, intervals over tasks)" in text
+    assert "## Paired differences: other − mine (intervals over tasks)" in text
     assert "| scene2 | L0 | 0.0 | 100.0 | -100.0 |" in text
-    assert "episode(s) only in" in text
     assert main(["report", str(run), str(other), "--out", str(tmp_path / "c.md")]) == 0
     assert (tmp_path / "c.md").read_text() == text
-    assert main(["report", str(run), str(other), str(run)]) == 1
-    assert "one run, or two to compare" in capsys.readouterr().err
+    assert "holds 3 episode(s) that another run lacks" in capsys.readouterr().err
+    assert main(["report", str(run), str(other), str(run), "--out", str(tmp_path / "three")]) == 0
+    page = (tmp_path / "three" / "comparison.html").read_text()
+    assert "mine vs other vs mine" in page and (tmp_path / "three" / "figures" / "runs.svg").is_file()
 
 
 def test_a_folder_without_a_run_is_a_clear_error(tmp_path):
-    with pytest.raises(ReportError, match="holds no evaluation run"):
+    with pytest.raises(RunReadError, match="holds no evaluation run"):
         write_report(tmp_path)
 
 
@@ -140,14 +158,17 @@ def test_the_printed_table_gives_moved_and_as_trained_rows_with_their_episodes()
     from robofollow.eval.tables import table_text
 
     lines = table_text(summary(MOTION_RECORDS, OPTIONS)).splitlines()
+    assert max(len(line) for line in lines) <= 80
     scene = next(i for i, line in enumerate(lines) if line.startswith("scene2"))
-    assert lines[scene].split() == ["scene2", "100.0", "100.0", "100.0", "50.0", "41.7", "33.3",
-                                    "75.0", "62.5", "100.0"]
-    moved, trained = lines[scene + 1], lines[scene + 2]
-    assert moved.split() == ["moved", "25.0", "12.5", "0.0", "50.0", "50.0", "100.0", "(L1",
-                             "2,", "L3", "1", "episodes)"]
-    assert trained.split() == ["as-trained", "100.0", "100.0", "100.0", "100.0", "75.0",
-                               "100.0", "(L1", "1,", "L3", "1", "episodes)"]
+    # every cell holds fewer than FEW episodes: each is marked, and the mark said
+    assert lines[scene].split() == ["scene2", "100", "100", "100*", "50.0", "41.7", "33.3*",
+                                    "75.0", "62.5", "100*"]
+    assert lines[-2].startswith("*") and "fewer than 20 episodes" in lines[-2]
+    moved, trained, counts = lines[scene + 1: scene + 4]
+    assert moved.split() == ["moved", "25.0", "12.5", "0.0*", "50.0", "50.0", "100*"]
+    assert trained.split() == ["as-trained", "100", "100", "100*", "100", "75.0", "100*"]
+    assert counts.split() == ["episodes", "(moved,", "as-trained):", "L1", "2,", "1;", "L3",
+                              "1,", "1"]
     from robofollow.eval.tables import LABEL, WIDTH
 
     # the L1 values in the L1 column (the second: levels L0, L1, L3), the L3 ones in the third
@@ -186,7 +207,7 @@ def test_records_without_their_motion_show_it_unknown_or_take_the_compiled_one(r
     from robofollow.eval.tables import table_text
 
     printed = table_text(summary(older, OPTIONS))
-    assert "motion unknown: L1 3, L3 2 episodes" in printed
+    assert "motion unknown: L1 3, L3 2 (records" in " ".join(printed.split())
     assert [line.split()[:3] for line in printed.splitlines()
             if line.strip().startswith("moved")] == [["moved", "-", "-"]]
     motions = {r["episode"]: r["motion"] for r in MOTION_RECORDS}
@@ -214,7 +235,7 @@ def test_comparisons_give_the_moved_and_as_trained_rows(run, tmp_path):
     (other / "run.json").write_text(json.dumps(OPTIONS.to_json()))
     _write(other, [dict(r, intent_score=1.0) for r in MOTION_RECORDS])
     _write(run, MOTION_RECORDS)
-    text = comparison([run, other])
+    text = comparison_markdown(compare_reports([run, other]))
     assert "| scene2 | L1 | 50.0 | 100.0 | +50.0 |" in text
     assert "| scene2 | L1 moved | 25.0 | 100.0 | +75.0 |" in text
     assert "| scene2 | L1 as-trained | 100.0 | 100.0 | +0.0 |" in text

@@ -139,7 +139,7 @@ def test_a_no_op_scores_zero_everywhere(asked):
     result = rollout.finish()[0]
     assert all(c == (0.0, 0.0) for c in credits(result)) and not result.complete
     assert result.executed_behaviour.description == "nothing moved"
-    assert result.executed_behaviour.match is None
+    assert result.executed_behaviour.match is None and result.executed_behaviour.arms_moved is False
 
 
 # (f) a conditional, the branch its condition does not select
@@ -207,3 +207,17 @@ def test_a_mixed_sequence_completes_on_every_steps_end_state():
     dropped = Script(record.id).perform(both).grip("left", 1.0)  # lets the pickup go
     result = score(both, dropped.trajectory(), scene)
     assert result.stages[-1].intent == 0.0 and not result.complete
+
+
+def test_arms_that_move_in_free_air_touched_nothing_and_are_told_from_still_ones():
+    """A waving arm that touches nothing earns nothing, like a no-op, but the record says its
+    arms moved (the reports count it apart from 'nothing moved')."""
+    record = episode("scene2/L0/pickup_left_cube#r1")
+    rollout = Rollout(benchmark(), Stage(64, 48), record, render=False)
+    waved = robot.home_state()
+    waved[0] += 0.25  # the left arm's waist turns, at home height
+    rollout.execute([waved] * 60 + [robot.home_state()] * 90)
+    result = rollout.finish()[0]
+    assert all(c == (0.0, 0.0) for c in credits(result)) and not result.complete
+    assert result.executed_behaviour.description == "the arms moved but touched nothing"
+    assert result.executed_behaviour.arms_moved is True and result.executed_behaviour.match is None

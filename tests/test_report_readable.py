@@ -1,6 +1,6 @@
-"""Reports read at a glance: tasks named by level and instruction (shortened, unique, in full
-in the task table and the HTML tooltips), wide matrices in the HTML only with upright headers
-in a scrolling box, and completion told apart from doing as instructed."""
+"""Reports read at a glance: tasks named by level and full instruction (unique, with the id
+beside it), wide matrices in tasks.html only with upright headers in a scrolling box, and
+completion told apart from doing as instructed."""
 
 from __future__ import annotations
 
@@ -10,7 +10,9 @@ import re
 from collections import Counter
 from dataclasses import replace
 
-from robofollow.eval.report import DID, NAME_CHARS, report_data, write_report
+from robofollow.eval.outcomes import DID, UNTRAINED
+from robofollow.eval.report import write_report
+from robofollow.eval.report_data import report_data
 from tests.report_helpers import OPTIONS, fake_record
 
 PLACE = ("Use your right arm to pick up the smaller blue object and place it in the {} bowl, "
@@ -50,37 +52,25 @@ def _write(folder, records, options=OPTIONS):
     return write_report(folder)
 
 
-def test_tasks_are_named_by_level_and_shortened_instruction_unique_and_told_apart():
+def test_tasks_are_named_by_level_and_full_instruction_and_told_apart():
     names = report_data("run", OPTIONS, _records(["instructed"]))["names"]
     by_task = {task.split("/", 2)[2]: name for task, name in names.items()}
     assert len(set(names.values())) == len(names)
-    for task, name in by_task.items():
-        text = INSTRUCTIONS[task]
-        assert name.startswith("L2 · ")
-        shown = re.sub(r" (@\S+|\(\d+\))$", "", name.removeprefix("L2 · "))
-        head = shown.split("…")[0].rstrip()
-        assert text.startswith(head) and len(head) <= NAME_CHARS
-        assert shown == text if len(text) <= NAME_CHARS else len(shown) < len(text)
-    # the first word that tells two coinciding shortenings apart, the shared words elided
-    assert by_task["place_green@default/referents-1"] == (
-        "L2 · Use your right arm to pick up the smaller blue … the green…")
-    assert by_task["place_yellow@default/referents-2"].endswith("… the yellow…")
+    for task, name in by_task.items():  # never cut: "left of" / "right of" stay
+        assert re.sub(r" (@\S+|\(\d+\))$", "", name) == f"L2 · {INSTRUCTIONS[task]}"
     # the same instruction on two layouts: the layout
     assert by_task["pickup@scene2_3"] == (
         "L2 · Use your left arm to pick up the blue cylinder. @scene2_3")
-    # routes that differ twice: the first difference from the closest text, then numbers
-    routes = [by_task[t] for t in INSTRUCTIONS if t.startswith("route")]
-    assert [name[-4:] for name in routes] == [" (1)", " (1)", " (2)", " (2)"]
-    assert all("… the long… (" in n or "… the short… (" in n for n in routes)
+    assert by_task["place_green@default/referents-1"] == f"L2 · {PLACE.format('green')}"
 
 
-def test_the_full_instruction_stays_in_the_task_table_and_the_tooltips(tmp_path):
-    markdown, html = _write(tmp_path / "run", _records(["instructed"]))
-    text, page = markdown.read_text(), html.read_text()
+def test_the_task_pages_give_the_full_instruction_and_the_id(tmp_path):
+    markdown, _ = _write(tmp_path / "run", _records(["instructed"]))
+    text, page = markdown.read_text(), (tmp_path / "run" / "tasks.html").read_text()
     for task, instruction in INSTRUCTIONS.items():
-        assert f"| {instruction} (scene2/L2/{task}) |" in text
-        assert f'title="{instruction} (scene2/L2/{task})"' in page
-    assert "referents-1 |" not in text.split("## Tasks")[0]  # ids only in the task table
+        assert f"| L2 · {instruction}" in text and f"| scene2/L2/{task} |" in text
+        assert (f'<th class="task">L2 · {html.escape(instruction)}' in page
+                and f'<small class="id">scene2/L2/{task}</small>' in page)
 
 
 def test_runs_given_other_instructions_name_tasks_by_their_own_instruction(tmp_path):
@@ -101,7 +91,7 @@ def test_older_runs_given_other_instructions_name_their_tasks_by_id(tmp_path):
     names = report_data("run", shuffled, records)["names"]
     assert names["scene2/L2/pickup@scene2_1"] == "L2 · pickup@scene2_1"
     text = _write(tmp_path / "run", records, shuffled)[0].read_text()
-    assert "Each task by its id" in text and "| Task id |" in text
+    assert "Each task by its id" in text and "| L2 · pickup@scene2_1 |" in text
     assert "Use your left arm" not in text
 
 
@@ -123,17 +113,19 @@ def test_a_wide_matrix_keeps_every_count_with_upright_headers_and_not_in_markdow
               for colour in ("red", "green", "blue", "white", "black", "orange", "pink")
               for bowl in ("near", "far", "middle")]
     records = _records(["instructed", None, *labels], rounds=10)
-    markdown, page = (path.read_text() for path in _write(tmp_path / "run", records))
+    markdown = _write(tmp_path / "run", records)[0].read_text()
+    page = (tmp_path / "run" / "tasks.html").read_text()
     data = report_data("run", OPTIONS, records)
     assert len(data["matrices"]["scene2"]["columns"]) == 23
     assert '<div class="wide"><table class="matrix">' in page
     assert page.count('<th class="behaviour"><span>') == 23  # one header row, upright
-    outcome = {"instructed": DID[0], None: DID[3]}
+    outcome = {"instructed": DID[0], None: UNTRAINED}
     assert _html_matrix(page, "scene2") == Counter(
         (data["names"][r["task"]], outcome.get(r["executed_behaviour"]["match"],
                                                r["executed_behaviour"]["match"]))
         for r in records)
-    assert "matrix of every task is in report.html" in markdown
+    assert "matrix of every task is in tasks.html" in markdown
+    assert "matrix" not in (tmp_path / "run" / "report.html").read_text()
     assert max(line.count("|") for line in markdown.splitlines()) <= 16  # no 23-column table
 
 
@@ -143,8 +135,9 @@ def test_completion_is_told_apart_from_doing_as_instructed(tmp_path):
     markdown, html = _write(tmp_path / "run", records)
     text, page = markdown.read_text(), html.read_text()
     assert ("| Scene | Level | Completed: end state | Closest: as instructed | another training "
-            "task | other branch | unrecognised |") in text
-    assert "| scene2 | L2 | 62.5 | 50.0 | 50.0 | 0.0 | 0.0 |" in text
+            "task | other branch | nothing moved | moved but touched nothing | handled objects "
+            "in no trained way |") in text
+    assert "| scene2 | L2 | 62.5 | 50.0 | 50.0 | 0.0 | 0.0 | 0.0 | 0.0 |" in text
     assert "An episode can be completed without being closest to the\ninstruction" in text
     assert "Closest behaviour to what the arms did</th>" in page
     assert "<caption>Completed (the instructed end state) is not the same as done as " \

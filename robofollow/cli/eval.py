@@ -16,7 +16,7 @@ from robofollow.compiler.spec import LEVELS, MOTION_LEVELS, ROUNDS
 from robofollow.errors import RoboFollowError
 from robofollow.eval.deadline import DEFAULT_POLICY_TIMEOUT
 from robofollow.eval.limits import CALL_TIMEOUT_S, MAX_MESSAGE_BYTES
-from robofollow.eval.modes import INSTRUCTION_MODES, VIDEO_MODES
+from robofollow.eval.modes import EXPORTS, INSTRUCTION_MODES, VIDEO_MODES
 from robofollow.sim import CHUNK
 from robofollow.workers import EXECUTORS
 
@@ -104,22 +104,22 @@ def add_eval(commands) -> None:
 
 def cmd_eval(args) -> int:
     from robofollow.compiled_cache import load
+    from robofollow.compiler.spec_loader import load_spec
     from robofollow.eval.compare import CONTROLS, control_comparisons
-    from robofollow.eval.loading import with_privileged
+    from robofollow.eval.loading import check_policy, with_privileged
     from robofollow.eval.policy_kind import is_server
     from robofollow.eval.report import write_report
+    from robofollow.eval.run_folder import check_prepare
     from robofollow.eval.runner import EvalOptions, evaluate, failures_text, shard_of
     from robofollow.eval.tables import table_text
 
-    compiled = load(specs_of(args))
-    scenes = _names(args.scenes, list(compiled.spec.scenes), "scene")
-    levels = _names(args.levels, list(LEVELS), "level")
-    tasks = _names(args.tasks, list(compiled.task_ids), "task") if args.tasks else []
+    # everything a typo can spoil is checked before the (slow) compile and before any file
+    check_policy(args.policy)
     if args.policy_timeout is not None and is_server(args.policy):
         raise RoboFollowError("--policy-timeout limits in-process policies; a server takes "
                               "its own: --policy URL?timeout=S&retries=N")
     if args.shard:
-        shard_of(args.shard)  # said before anything runs
+        shard_of(args.shard)
         if args.until_separated:
             raise RoboFollowError("--until-separated decides when a whole run stops; a shard "
                                   "is a part of one (run it without --shard)")
@@ -129,15 +129,28 @@ def cmd_eval(args) -> int:
         raise RoboFollowError(f"--controls {args.instruction_mode}: the run itself gives "
                               f"{args.instruction_mode} instructions; a control arm compares "
                               "the instructed run with another mode")
+    spec = load_spec(specs_of(args))
+    scenes = _names(args.scenes, list(spec.scenes), "scene")
+    levels = _names(args.levels, list(LEVELS), "level")
     policy = with_privileged(args.policy) if args.allow_privileged else args.policy
     options = EvalOptions(policy, tuple(scenes), tuple(levels), args.rounds,
-                          args.instruction_mode, args.video, compiled.spec.digest, tuple(tasks),
+                          args.instruction_mode, args.video, spec.digest, (),
                           args.sample, args.policy_timeout if args.policy_timeout is not None
                           else None if is_server(args.policy) else DEFAULT_POLICY_TIMEOUT,
                           args.shard)
     arms = [(Path(args.out), options)] + [
         (Path(args.out) / CONTROLS / mode, replace(options, instruction_mode=mode))
         for mode in controls]
+    if not args.tasks:
+        for out, arm in arms:
+            check_prepare(out, arm.to_json(), args.resume)
+    compiled = load(specs_of(args))
+    if args.tasks:
+        tasks = tuple(_names(args.tasks, list(compiled.task_ids), "task"))
+        arms = [(out, replace(arm, tasks=tasks)) for out, arm in arms]
+        options = arms[0][1]
+        for out, arm in arms:
+            check_prepare(out, arm.to_json(), args.resume)
     try:
         if args.until_separated:
             result, stopped = _until_separated(compiled, options, args)
@@ -201,50 +214,96 @@ def _until_separated(compiled, options, args) -> tuple[dict, int]:
 
 
 def _names(text: str | None, known: list[str], what: str) -> list[str]:
-    """A comma-separated selection of known names (all of them when empty)."""
-    chosen = [n.strip() for n in (text or "").split(",") if n.strip()] or known
-    unknown = [n for n in chosen if n not in known]
+    """A comma-separated selection of known names, in any case (all of them when empty);
+    a name not known is an error that offers the closest ones."""
+    by_lower = {name.lower(): name for name in known}
+    chosen = [n.strip() for n in (text or "").split(",") if n.strip()]
+    unknown = [n for n in chosen if n.lower() not in by_lower]
     if unknown:
-        hints = [m for n in unknown for m in difflib.get_close_matches(n, known, n=3)]
-        listed = (f"did you mean {', '.join(dict.fromkeys(hints))}?" if hints and len(known) > 12
+        hints = [by_lower[m] for n in unknown
+                 for m in difflib.get_close_matches(n.lower(), list(by_lower), n=3)]
+        listed = (f"did you mean {', '.join(dict.fromkeys(hints))}?" if hints
                   else f"known: {', '.join(known[:12])}{' …' if len(known) > 12 else ''}")
         raise RoboFollowError(f"unknown {what} {', '.join(unknown)}; {listed}")
-    return [n for n in known if n in chosen]
+    picked = {by_lower[n.lower()] for n in chosen} or set(known)
+    return [n for n in known if n in picked]
 
 
 def add_report(commands) -> None:
     p = commands.add_parser(
-        "report", help="rebuild a run's report, or compare two runs",
-        description="With one RUN: rebuild RUN/report.md and RUN/report.html from its results. "
-                    "With two: their Table 1 cells side by side with the differences "
-                    "(markdown, printed or written to --out). L1 and L3 are also given for "
-                    "their moved and as-trained tasks; records written before they carried "
-                    "their task's motion take it from the compiled episodes when the specs "
-                    "are the run's (else it is unknown: \"-\").")
-    p.add_argument("runs", nargs="+", metavar="RUN", help="one or two run folders")
-    p.add_argument("--out", metavar="FILE.md", help="write the comparison here")
+        "report", help="rebuild a run's report, or compare runs",
+        description="With one RUN: rebuild its report (RUN/report.md, report.html, tasks.html "
+                    "and the figures in RUN/figures/, SVG and PDF) from its episode records "
+                    "or, for a run that keeps only those (the runs docs/results ships), its "
+                    "scores.csv.gz; a report is never rebuilt from fewer episodes than the "
+                    "run's summary counts. With several: their Table 1 cells side by side on "
+                    "the episodes every run holds (said when they hold different ones), each "
+                    "later run's differences from the first and its paired differences with "
+                    "intervals over tasks. L1 and L3 are also given for their moved and "
+                    "as-trained tasks; records written before they carried their task's "
+                    "motion take it from the compiled episodes when the specs are the run's "
+                    "(else it is unknown: \"-\").",
+        epilog="examples:\n  robofollow report runs/blind\n  robofollow report runs/blind "
+               "--export latex\n  robofollow report runs/expert runs/blind runs/noop --out "
+               "runs/three",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("runs", nargs="+", metavar="RUN", help="one run folder, or several to compare")
+    p.add_argument("--out", metavar="PATH",
+                   help="comparisons: a folder for comparison.md, comparison.html and the "
+                        "figure of every run on one axis (a FILE.md: the markdown only); "
+                        "default: print the markdown")
+    p.add_argument("--export", choices=sorted(EXPORTS), action="append",
+                   help="one run: also write Table 1 with its intervals for a paper "
+                        "(RUN/table1.csv, RUN/table1.tex); may be repeated")
     specs_option(p)
     p.set_defaults(handler=cmd_report)
 
 
 def cmd_report(args) -> int:
-    from robofollow.eval.report import comparison, write_report
+    from robofollow.eval.report import (
+        compare_reports,
+        comparison_markdown,
+        write_comparison,
+        write_report,
+    )
 
     runs = [Path(run) for run in args.runs]
-    if len(runs) > 2:
-        raise RoboFollowError("report takes one run, or two to compare")
     motions = [_motions(run, args) for run in runs]
     if len(runs) == 1:
         markdown, html = write_report(runs[0], motions[0])
-        print(f"wrote {markdown} and {html}")
+        print(f"wrote {markdown}, {html} and {runs[0] / 'tasks.html'}")
+        for kind in args.export or ():
+            print(f"wrote {_export(runs[0], kind)}")
         return 0
-    text = comparison(runs, motions)
-    if args.out:
-        Path(args.out).write_text(text, encoding="utf-8")
+    if args.export:
+        raise RoboFollowError("--export writes one run's Table 1: give one RUN")
+    found = compare_reports(runs, motions)
+    for line in found.warnings:
+        print(f"warning: {line}", file=sys.stderr)
+    if args.out and not args.out.endswith(".md"):
+        paths = write_comparison(found, Path(args.out))
+        print(f"wrote {', '.join(str(p) for p in paths)}")
+    elif args.out:
+        Path(args.out).write_text(comparison_markdown(found), encoding="utf-8")
         print(f"wrote {args.out}")
     else:
-        print(text)
+        print(comparison_markdown(found))
     return 0
+
+
+def _export(run: Path, kind: str) -> Path:
+    from robofollow.eval.export import table1_csv, table1_latex
+    from robofollow.eval.runner import summary
+    from robofollow.eval.saved_run import load_run
+
+    options, results = load_run(run)
+    found = summary(results, options)
+    path = run / EXPORTS[kind]
+    path.write_text(table1_csv(found) if kind == "csv" else table1_latex(
+        found, f"RoboFollow Table 1: {options.policy}, {found['episodes']} episodes; "
+               "Intent, Execution and Completion (0--100) with 95\\% intervals over tasks."),
+        encoding="utf-8")
+    return path
 
 
 def add_merge(commands) -> None:
@@ -353,7 +412,7 @@ def _motions(run: Path, args) -> dict[str, str | None]:
     none (their motion is unknown)."""
     from robofollow.compiled_cache import load
     from robofollow.compiler.spec_loader import load_spec
-    from robofollow.eval.report import load_run
+    from robofollow.eval.saved_run import load_run
 
     options, results = load_run(run)
     missing = [r["episode"] for r in results if "motion" not in r and r["level"] in MOTION_LEVELS]

@@ -20,8 +20,8 @@ import numpy as np
 from robofollow.compiler.spec import LEVELS
 from robofollow.errors import RoboFollowError
 from robofollow.eval.pages import PAGES, p_value, signed_interval
-from robofollow.eval.run_folder import RESULTS, RUN_FILE, read_results
-from robofollow.eval.scores import SCORES, read_scores
+from robofollow.eval.run_folder import RUN_FILE
+from robofollow.eval.saved_run import RunReadError, load_records
 from robofollow.oracle.intervals import holm, paired_test
 from robofollow.oracle.metrics import METRICS
 
@@ -36,31 +36,17 @@ class CompareError(RoboFollowError):
 
 def run_scores(run: Path) -> list[dict]:
     """A run's episodes as {episode, scene, level, task, hash, start, intent, execution,
-    complete}:
-    from its full records (RUN/episodes.jsonl) or, where a run keeps only those, its score
-    file (RUN/scores.csv.gz)."""
-    if (run / RESULTS).is_file():
-        return [{"episode": r["episode"], "scene": r["scene"], "level": r["level"],
-                 "task": r["task"], "hash": r.get("hashes", {}).get("episode", ""),
-                 "start": r.get("hashes", {}).get("start", ""),
-                 "intent": float(r["intent_score"]), "execution": float(r["execution_score"]),
-                 "complete": bool(r["complete"])} for r in read_results(run / RESULTS)]
-    if (run / SCORES).is_file():
-        rows = []
-        for row in read_scores(run / SCORES):
-            task = row["episode"].partition("#")[0]
-            scene, level = task.split("/")[:2]
-            rows.append({"episode": row["episode"], "scene": scene, "level": level,
-                         "task": task, "hash": row["hash"], "start": row["start"],
-                         "intent": row["intent"],
-                         "execution": row["execution"], "complete": row["complete"]})
-        return rows
-    if not run.is_dir():
-        raise CompareError(f"{run}: no such run folder")
-    if (run / RUN_FILE).is_file():
-        raise CompareError(f"{run} holds an evaluation run but none of its episodes (no "
-                           f"{RESULTS} or {SCORES})")
-    raise CompareError(f"{run} holds no evaluation run (no {RUN_FILE}, {RESULTS} or {SCORES})")
+    complete}: from its full records (RUN/episodes.jsonl) or, where a run keeps only those,
+    its score file (RUN/scores.csv.gz)."""
+    try:
+        records = load_records(run)
+    except RunReadError as error:
+        raise CompareError(str(error)) from None
+    return [{"episode": r["episode"], "scene": r["scene"], "level": r["level"],
+             "task": r["task"], "hash": r.get("hashes", {}).get("episode", ""),
+             "start": r.get("hashes", {}).get("start", ""),
+             "intent": float(r["intent_score"]), "execution": float(r["execution_score"]),
+             "complete": bool(r["complete"])} for r in records]
 
 
 @dataclass

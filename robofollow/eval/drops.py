@@ -28,12 +28,13 @@ def origin(task_id: str) -> str:
 
 def level_drops(results: list[dict]) -> list[dict]:
     """Per scene and later level: the L0 score, the level's, and the drop (L0 - level, points)
-    with its interval and p-values, per metric; "paired" says how it was compared."""
+    with its interval and p-values, per metric; "paired" says how it was compared. The same
+    in any record order."""
     means: dict[tuple[str, str], dict[str, dict[str, float]]] = defaultdict(dict)
     grouped: dict[tuple[str, str, str], list[dict]] = defaultdict(list)
     for record in results:
         grouped[record["scene"], record["level"], record["task"]].append(record)
-    for (scene, level, task), records in grouped.items():
+    for (scene, level, task), records in sorted(grouped.items()):
         means[scene, level][task] = {m: float(np.mean([float(r[f]) for r in records]))
                                      for m, f in RECORD_FIELDS.items()}
     rows = []

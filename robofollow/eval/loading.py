@@ -6,9 +6,10 @@ protocol) or `tcp://host:port` (upstream RoboFollow's protocol)."""
 from __future__ import annotations
 
 import importlib
+import importlib.util
 from urllib.parse import parse_qsl, urlsplit
 
-from robofollow.errors import RoboFollowError
+from robofollow.errors import RoboFollowError, did_you_mean
 from robofollow.eval.policy import OBSERVATION_PARTS, Policy
 from robofollow.eval.policy_kind import SERVER_KINDS, PolicyKind, is_server, policy_kind
 from robofollow.eval.reference import REFERENCE_POLICIES
@@ -30,11 +31,7 @@ def load_policy(spec: str) -> Policy:
         from robofollow.learn.policy import load_baseline  # (the learn package is heavy)
 
         return load_baseline(spec)
-    module_name, _, factory_name = spec.partition(":")
-    if not module_name or not factory_name:
-        raise PolicyLoadError(f"--policy {spec!r}: expected one of "
-                              f"{', '.join(REFERENCE_POLICIES)}, baseline:NAME, a checkpoint "
-                              "folder, module:factory, ws://host:port or tcp://host:port")
+    module_name, factory_name = _factory_parts(spec)
     try:
         module = importlib.import_module(module_name)
     except ImportError as error:
@@ -53,6 +50,44 @@ def load_policy(spec: str) -> Policy:
     return policy
 
 
+def check_policy(spec: str) -> None:
+    """Said before anything runs, without building the policy or reaching its server: a
+    --policy that names nothing usable (a misspelt reference policy or shipped baseline, with
+    the closest name; a malformed server address; a module that cannot be found)."""
+    kind = policy_kind(spec)
+    if kind in SERVER_KINDS:
+        _server_settings(spec)
+    elif kind == "baseline":
+        from robofollow.learn.policy import shipped_names  # (the learn package is heavy)
+
+        name, shipped = spec.partition(":")[2], shipped_names()
+        if name not in shipped:
+            hint = did_you_mean(name, shipped) or f"shipped: {', '.join(shipped) or 'none'}"
+            raise PolicyLoadError(f"--policy {spec!r}: no shipped baseline {name!r}; {hint}")
+    elif kind == "factory":
+        module_name, _ = _factory_parts(spec)
+        try:
+            found = importlib.util.find_spec(module_name)
+        except (ImportError, ValueError) as error:
+            raise PolicyLoadError(f"--policy {spec!r}: cannot import {module_name}: "
+                                  f"{error}") from None
+        if found is None:
+            raise PolicyLoadError(f"--policy {spec!r}: no module {module_name!r} on the "
+                                  "Python path")
+
+
+def _factory_parts(spec: str) -> tuple[str, str]:
+    """A `module:factory` policy's module and factory; else the error, with the closest
+    reference policy where the name is one misspelt ("did you mean 'blind'?")."""
+    module_name, _, factory_name = spec.partition(":")
+    if module_name and factory_name:
+        return module_name, factory_name
+    hint = did_you_mean(spec.lower(), REFERENCE_POLICIES)
+    raise PolicyLoadError(f"--policy {spec!r}: {hint + ' ' if hint else ''}expected one of "
+                          f"{', '.join(REFERENCE_POLICIES)}, baseline:NAME, a checkpoint "
+                          "folder, module:factory, ws://host:port or tcp://host:port")
+
+
 SERVER_SETTINGS = {"timeout": float, "retries": int, "max_message": int, "privileged": int}
 
 
@@ -64,6 +99,14 @@ def _remote(spec: str, kind: PolicyKind) -> Policy:
     server may have privileged observations, each episode's scene, layout and seed (default 0:
     a server that asks for them is refused; `robofollow eval --allow-privileged` adds it, and
     the run's policy records it)."""
+    address, settings = _server_settings(spec)
+    if kind == "tcp":
+        return TcpPolicy(address.hostname, address.port, **settings)
+    return WebsocketPolicy(f"{address.scheme}://{address.netloc}{address.path}", **settings)
+
+
+def _server_settings(spec: str):
+    """A server --policy's address (urlsplit) and its settings, checked."""
     address = urlsplit(spec)
     try:
         pairs = parse_qsl(address.query, strict_parsing=bool(address.query))
@@ -82,9 +125,7 @@ def _remote(spec: str, kind: PolicyKind) -> Policy:
         raise PolicyLoadError(f"--policy {spec!r}: timeout and max_message must be positive, "
                               "retries at least 0, privileged 0 or 1")
     settings["privileged"] = bool(settings.get("privileged", 0))
-    if kind == "tcp":
-        return TcpPolicy(address.hostname, port, **settings)
-    return WebsocketPolicy(f"{address.scheme}://{address.netloc}{address.path}", **settings)
+    return address, settings
 
 
 def with_privileged(spec: str) -> str:

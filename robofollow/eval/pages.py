@@ -7,6 +7,8 @@ value |safe."""
 
 from __future__ import annotations
 
+import math
+
 import jinja2
 
 PAGES = jinja2.Environment(
@@ -37,5 +39,12 @@ def rounds_of(cell: dict) -> str:
     return f"{rounds:.0f}" if rounds == int(rounds) else f"{rounds:.1f}"
 
 
+def shade(value: float) -> str:
+    """Table 1's background for an Intent (0-100): green on a square-root scale, so that
+    0-30, where learned policies sit, spreads over half of it."""
+    light = round(255 - 150 * math.sqrt(max(0.0, min(value, 100.0)) / 100))
+    return f"rgb({light}, 255, {light})" if value > 0 else "#fff"
+
+
 PAGES.globals.update(interval=interval, signed_interval=signed_interval, p_value=p_value,
-                     rounds_of=rounds_of)
+                     rounds_of=rounds_of, shade=shade)

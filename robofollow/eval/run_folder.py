@@ -218,21 +218,36 @@ def write_json(path: Path, data) -> None:
                               f"{RESUMABLE}") from None
 
 
-def prepare(out: Path, options: dict, resume: bool) -> None:
-    """Record a new run's options, or check that a resumed run has the same."""
+def _unstarted(out: Path) -> bool:
+    """A run folder whose run never finished an episode (a run stopped before its first, or a
+    mistyped command's): as good as empty."""
+    results = out / RESULTS
+    return (out / RUN_FILE).is_file() and (not results.is_file() or results.stat().st_size == 0)
+
+
+def check_prepare(out: Path, options: dict, resume: bool) -> None:
+    """Why the run folder cannot take this run (new, or resumed with the same options), said
+    before anything is written."""
+    check_out(out)
     run_file = out / RUN_FILE
-    if run_file.is_file():
-        try:
-            previous = json.loads(run_file.read_text(encoding="utf-8"))
-        except (OSError, ValueError) as error:
-            raise EvalRunError(f"{run_file} cannot be read: {error}") from None
-        if not resume:
-            raise EvalRunError(f"{out} already holds a run; pass --resume to continue it, or "
-                               "choose another folder")
-        problem = changed_options(previous, options)
-        if problem:
-            raise EvalRunError(f"{out} {problem}")
+    if not run_file.is_file() or _unstarted(out):
         return
-    if _holds_files(out):
-        raise EvalRunError(f"{out} is not empty and holds no run")
-    write_json(run_file, options)
+    try:
+        previous = json.loads(run_file.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as error:
+        raise EvalRunError(f"{run_file} cannot be read: {error}") from None
+    if not resume:
+        raise EvalRunError(f"{out} already holds a run; pass --resume to continue it, or "
+                           "choose another folder")
+    problem = changed_options(previous, options)
+    if problem:
+        raise EvalRunError(f"{out} {problem}")
+
+
+def prepare(out: Path, options: dict, resume: bool) -> None:
+    """Record a new run's options (a folder with no finished episode counts as new), or check
+    that a resumed run has the same."""
+    check_prepare(out, options, resume)
+    if (out / RUN_FILE).is_file() and not _unstarted(out):
+        return
+    write_json(out / RUN_FILE, options)

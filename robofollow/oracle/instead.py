@@ -20,13 +20,22 @@ HEADINGS = {"left_of": "to the left", "right_of": "to the right", "behind": "awa
 
 def describe_actions(rec: Recording) -> str:
     """One clause per thing an arm went for, then one per object that ended elsewhere than
-    it started (but those still held, said already); 'nothing moved' when neither."""
+    it started (but those still held, said already); when neither, 'nothing moved' or, where
+    a gripper left its start (arms_moved), 'the arms moved but touched nothing'."""
     clauses = [f"the {ARMS[a.arm]} arm {_did(rec, a)}"
                for a in sorted(rec.attempts(0) + rec.attempts(1), key=lambda a: a.frame)]
     held = {rec.holding(arm)[-1] for arm in range(2)}
     clauses += [_ended(rec, body) for body in rec.movable
                 if body not in held and _moved(rec, body)]
-    return "; ".join(clauses) or "nothing moved"
+    if clauses:
+        return "; ".join(clauses)
+    return "the arms moved but touched nothing" if arms_moved(rec) else "nothing moved"
+
+
+def arms_moved(rec: Recording) -> bool:
+    """Whether a gripper went further from where it started than the profile's still radius."""
+    travel = np.linalg.norm(rec.ee - rec.ee[:1], axis=-1)  # (T, 2)
+    return bool(travel.max(initial=0.0) > rec.profile.still_radius)
 
 
 def _did(rec: Recording, attempt: Attempt) -> str:

@@ -23,6 +23,7 @@ class ExecutedBehaviour(Model):
     behaviour: str | None  # the match's steps, in the specs' `expect` syntax
     intent_score: float  # the trajectory's scores against the match
     execution_score: float
+    arms_moved: bool | None = None  # a gripper left its start (None: not recorded)
 
 
 class EpisodeScore(Model):

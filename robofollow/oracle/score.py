@@ -17,7 +17,7 @@ from robofollow.compiler.goals import scoring_nodes
 from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
 from robofollow.compiler.spec import Scene
 from robofollow.oracle.chance import passes_work
-from robofollow.oracle.instead import describe_actions
+from robofollow.oracle.instead import arms_moved, describe_actions
 from robofollow.oracle.recording import Attempt, Recording, arm_index
 from robofollow.oracle.results import EpisodeScore, ExecutedBehaviour, StageResult
 from robofollow.oracle.stages import AT_REST, EVALUATORS, GOING_FOR, Outcome
@@ -236,7 +236,8 @@ def _closest(rec: Recording, options: list[tuple[str, Behaviour]]) -> ExecutedBe
             best, best_key, best_scores = (name, behaviour), key, scores
     return ExecutedBehaviour(description=describe_actions(rec), match=best and best[0],
                              behaviour=best and describe(best[1]),
-                             intent_score=best_scores[0], execution_score=best_scores[1])
+                             intent_score=best_scores[0], execution_score=best_scores[1],
+                             arms_moved=arms_moved(rec))
 
 
 def _bodies(behaviour: Behaviour) -> set[str]:

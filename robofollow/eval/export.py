@@ -1,0 +1,71 @@
+"""Table 1 of a run for a paper: RUN/table1.csv (one row per scene and level, every metric with
+its 95% interval over tasks, chance and n) or RUN/table1.tex (a booktabs table, each cell
+"IS [low, high]" in the paper's layout: scenes as rows, L0-L3 as column groups)."""
+
+from __future__ import annotations
+
+import csv
+import io
+
+from robofollow.compiler.spec import LEVELS
+from robofollow.oracle.metrics import METRICS
+
+
+def table1_csv(summary: dict) -> str:
+    text = io.StringIO()
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow(["scene", "level", "tasks", "episodes",
+                     *[f"{m}{part}" for m in METRICS for part in ("", "_low", "_high")],
+                     "chance_IS", "chance_CR"])
+    for scene, row in summary["cells"].items():
+        for level in LEVELS:
+            if level not in row:
+                continue
+            cell = row[level]
+            writer.writerow([scene, level, cell["tasks"], cell["episodes"],
+                             *[f"{v:.1f}" for m in METRICS
+                               for v in (cell[m], *(cell["ci95_tasks"][m] or cell["ci95"][m]))],
+                             _optional(cell.get("chance_IS")), _optional(cell.get("chance_CR"))])
+    avg = summary["avg"]
+    writer.writerow(["avg", "", "", summary.get("episodes", ""),
+                     *[v for m in METRICS for v in (f"{avg[m]:.1f}", "", "")],
+                     _optional(summary.get("references", {}).get("chance_IS")),
+                     _optional(summary.get("references", {}).get("chance_CR"))])
+    return text.getvalue()
+
+
+def _optional(value: float | None) -> str:
+    return "" if value is None else f"{value:.1f}"
+
+
+def table1_latex(summary: dict, caption: str) -> str:
+    """Scenes as rows; per level, IS / ES / CR each with its interval over tasks in small
+    type beneath (\\makecell needs the makecell package, \\toprule booktabs)."""
+    cells = summary["cells"]
+    levels = [level for level in LEVELS if any(level in row for row in cells.values())]
+    spec = "l" + "ccc" * len(levels)
+    lines = [r"\begin{table}[t]", r"\centering", r"\small",
+             rf"\begin{{tabular}}{{{spec}}}", r"\toprule",
+             " & " + " & ".join(rf"\multicolumn{{3}}{{c}}{{{level}}}" for level in levels)
+             + r" \\",
+             " ".join(rf"\cmidrule(lr){{{2 + 3 * i}-{4 + 3 * i}}}" for i in range(len(levels))),
+             "Scene & " + " & ".join(" & ".join(METRICS) for _ in levels) + r" \\",
+             r"\midrule"]
+    for scene, row in cells.items():
+        values = []
+        for level in levels:
+            cell = row.get(level)
+            for metric in METRICS:
+                if cell is None:
+                    values.append("--")
+                    continue
+                low, high = cell["ci95_tasks"][metric] or cell["ci95"][metric]
+                values.append(rf"\makecell{{{cell[metric]:.1f}\\ \tiny[{low:.1f}, {high:.1f}]}}")
+        lines.append(scene.replace("_", r"\_") + " & " + " & ".join(values) + r" \\")
+    avg = summary["avg"]
+    lines += [r"\midrule",
+              (rf"Avg & \multicolumn{{{3 * len(levels)}}}{{l}}{{IS {avg['IS']:.1f}, "
+               rf"ES {avg['ES']:.1f}, CR {avg['CR']:.1f}}} \\"),
+              r"\bottomrule", r"\end{tabular}",
+              rf"\caption{{{caption}}}", r"\end{table}", ""]
+    return "\n".join(lines)
