@@ -40,8 +40,8 @@ def test_control_arms_run_the_same_episodes_and_report_the_language_effect(tmp_p
 
 
 def test_a_control_arm_must_be_another_instruction_mode(tmp_path, capsys):
-    for controls, message in (("empty,shufled", ("unknown control arm shufled; known: empty, "
-                                                 "shuffled")),
+    for controls, message in (("empty,shufled", ("unknown control arm shufled; did you mean "
+                                                 "shuffled?")),
                               ("empty", "the run itself gives empty instructions")):
         assert main(["eval", "--policy", "noop", "--controls", controls, "--instruction-mode",
                      "empty", "--out", str(tmp_path / "run")]) == 1

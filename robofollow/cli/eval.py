@@ -80,7 +80,11 @@ def add_eval(commands) -> None:
                         "(paired sign-flip test over tasks at 0.05 / --rounds after each "
                         "round; RUN/sequential.json says where it stopped)")
     p.add_argument("--video", choices=VIDEO_MODES, default="none",
-                   help="write mp4s of these episodes to RUN/videos (default: none)")
+                   help="write mp4s of these episodes to RUN/videos, each frame captioned "
+                        "with the instruction and the step; the report shows a sample beside "
+                        "each cell (default: none). Rendering makes every episode about 10x "
+                        "slower on a CPU, failures or not: an episode's outcome is known only "
+                        "at its end, and 'failures' keeps only the failed ones")
     p.add_argument("--policy-timeout", type=seconds, metavar="S",
                    help="end an episode whose in-process policy takes longer than S seconds "
                         "over a reset() or act() call, recording it as a policy failure "
@@ -221,7 +225,7 @@ def _names(text: str | None, known: list[str], what: str) -> list[str]:
     unknown = [n for n in chosen if n.lower() not in by_lower]
     if unknown:
         hints = [by_lower[m] for n in unknown
-                 for m in difflib.get_close_matches(n.lower(), list(by_lower), n=3)]
+                 for m in difflib.get_close_matches(n.lower(), list(by_lower), n=1)]
         listed = (f"did you mean {', '.join(dict.fromkeys(hints))}?" if hints
                   else f"known: {', '.join(known[:12])}{' …' if len(known) > 12 else ''}")
         raise RoboFollowError(f"unknown {what} {', '.join(unknown)}; {listed}")

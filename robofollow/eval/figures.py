@@ -170,7 +170,7 @@ def comparison_figure(runs: list[str], summaries: list[dict], folder: Path) -> d
     """Several runs' Intent per scene and level on one axis, with intervals over tasks."""
     keys = sorted({(scene, level) for s in summaries for scene, row in s["cells"].items()
                    for level in row}, key=lambda k: (k[1], k[0]))
-    figure = _figure(max(4.0, 0.5 * len(keys) + 1.5), 2.6)
+    figure = _figure(max(6.0, 0.22 * len(keys) * len(runs) + 1.5), 2.8)
     ax = figure.subplots()
     width = 0.8 / len(runs)
     for r, (run, found) in enumerate(zip(runs, summaries, strict=True)):
@@ -191,7 +191,8 @@ def comparison_figure(runs: list[str], summaries: list[dict], folder: Path) -> d
     ax.set_xticks(range(len(keys)), [f"{lv}\n{s}" for s, lv in keys], fontsize=6)
     ax.set_ylim(0, 105)
     ax.set_ylabel("Intent (0-100)")
-    ax.legend(fontsize=7, frameon=False, ncols=min(len(runs), 4), loc="upper right")
+    ax.legend(fontsize=7, frameon=False, ncols=min(len(runs), 4), loc="lower right",
+              bbox_to_anchor=(1, 1))
     return _save(figure, folder, "runs",
                  f"Intent per scene and level, one bar per run; {WHISKERS}; black ticks: "
                  "chance.")

@@ -10,7 +10,8 @@ from __future__ import annotations
 AS_INSTRUCTED, TRAINING, OTHER_BRANCH = "as instructed", "another training task", "other branch"
 STILL, UNTOUCHED, UNTRAINED = ("nothing moved", "moved but touched nothing",
                                "handled objects in no trained way")
-UNRECOGNISED = (STILL, UNTOUCHED, UNTRAINED)  # no known behaviour is close, split three ways
+UNRECORDED = "touched nothing, arm motion not recorded"  # records before arms_moved
+UNRECOGNISED = (STILL, UNTOUCHED, UNTRAINED, UNRECORDED)  # no known behaviour is close
 DID = (AS_INSTRUCTED, TRAINING, OTHER_BRANCH, *UNRECOGNISED)
 NO_CONTACT = ("nothing moved", "the arms moved but touched nothing")  # the oracle's words
 
@@ -26,8 +27,14 @@ def closest(record: dict) -> str:
         return {"instructed": AS_INSTRUCTED, "other branch": OTHER_BRANCH}.get(match, match)
     if behaviour.get("description") not in NO_CONTACT:
         return UNTRAINED
-    # records written before the oracle said whether the arms moved: touched nothing, at least
-    return STILL if behaviour.get("arms_moved") is False else UNTOUCHED
+    moved = behaviour.get("arms_moved")
+    return UNRECORDED if moved is None else UNTOUCHED if moved else STILL
+
+
+def kinds(records: list[dict]) -> tuple[str, ...]:
+    """The rows of the "what the policy did" table: DID, but UNRECORDED where no record is."""
+    return tuple(k for k in DID if k != UNRECORDED
+                 or any(closest(r) == UNRECORDED for r in records))
 
 
 def kind(record: dict) -> str:

@@ -16,7 +16,7 @@ import numpy as np
 
 from robofollow.compiler.spec import LEVELS, MOTION_LEVELS
 from robofollow.eval.drops import level_drops, origin
-from robofollow.eval.outcomes import DID, UNRECOGNISED, closest, first_failure, kind
+from robofollow.eval.outcomes import DID, UNRECOGNISED, closest, first_failure, kind, kinds
 from robofollow.eval.pages import shade
 from robofollow.eval.runner import EvalOptions, summary
 from robofollow.oracle.metrics import METRICS, MOTIONS
@@ -177,14 +177,14 @@ def clipping(results: list[dict]) -> str | None:
             "not be the robot's, or it drives the arms against their stops.")
 
 
-def _did(results: list[dict]) -> dict:
+def _did(results: list[dict], shown: tuple[str, ...]) -> dict:
     """Per scene and level: % completed and % of each kind of what the policy did."""
     did: dict = {}
     for (scene, level), records in sorted(_group(results, "scene", "level").items()):
         counts = Counter(kind(r) for r in records)
         did.setdefault(scene, {})[level] = {
             "completed": 100 * sum(r["complete"] for r in records) / len(records),
-            **{k: 100 * counts[k] / len(records) for k in DID}}
+            **{k: 100 * counts[k] / len(records) for k in shown}}
     return did
 
 
@@ -252,6 +252,7 @@ def report_data(name: str, options: EvalOptions, results: list[dict],
                  for scene, row in cells.items() for level in levels
                  if level in MOTION_LEVELS and "by_motion" in row.get(level, {})]
     table = _table(cells, levels)
+    shown = kinds(results)
     data = {
         "name": name, "options": options, "summary": totals, "levels": levels,
         "table": table, "grid": _grid(table),
@@ -266,7 +267,8 @@ def report_data(name: str, options: EvalOptions, results: list[dict],
         "tasks": [{"task": task, **_scores(records)}
                   for task, records in sorted(_group(results, "task").items())],
         "names": names, "instructions": instructions,
-        "did": _did(results), "did_kinds": DID, "unrecognised": UNRECOGNISED,
+        "did": _did(results, shown), "did_kinds": shown,
+        "unrecognised": [k for k in UNRECOGNISED if k in shown],
         "confusions": Counter((r["task"], closest(r)) for r in results
                               if kind(r) == DID[1]).most_common(TOP),
         "matrices": {scene: _matrix(records)

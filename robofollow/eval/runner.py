@@ -63,7 +63,7 @@ from robofollow.oracle.metrics import table
 from robofollow.sim.cameras import side_by_side
 from robofollow.sim.simulation import CONTROL_HZ
 from robofollow.sim.stage import Stage
-from robofollow.sim.video import write_video
+from robofollow.sim.video import captioned, write_video
 from robofollow.workers import WorkerStartError, results
 
 
@@ -196,7 +196,8 @@ class Evaluator:
     def __call__(self, episode: Episode) -> dict:
         instruction = given_instruction(self.compiled, episode, self.options.instruction_mode)
         frames: list = []
-        on_frame = ((lambda stage: frames.append(side_by_side(stage.cameras.images())))
+        on_frame = ((lambda stage: frames.append(captioned(
+            side_by_side(stage.cameras.images()), instruction, len(frames))))
                     if self.options.video != "none" else None)
         run = run_episode(self.compiled, self.stage, episode, self.policy, instruction,
                           on_frame=on_frame, timeout=self.options.policy_timeout)

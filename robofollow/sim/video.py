@@ -7,6 +7,7 @@ from pathlib import Path
 
 import av
 import numpy as np
+from PIL import Image, ImageDraw, ImageFont
 
 CODEC = "libx264"
 CODEC_NAME = "h264"  # the format the encoder writes
@@ -45,6 +46,27 @@ class VideoEncoder:
     def close(self) -> None:
         self.container.mux(self.stream.encode())
         self.container.close()
+
+
+CAPTION_HEIGHT = 28  # px: the band under a captioned frame
+
+
+def captioned(frame: np.ndarray, text: str, step: int) -> np.ndarray:
+    """The frame over a dark band that gives the text (cut with an ellipsis where it does not
+    fit) and the step: what a viewer of an episode's video needs to know at every frame."""
+    height, width = frame.shape[:2]
+    band = Image.new("RGB", (width, CAPTION_HEIGHT), (24, 24, 24))
+    draw = ImageDraw.Draw(band)
+    font = ImageFont.load_default()
+    counter = f"step {step}"
+    room = width - 16 - draw.textlength(counter, font=font) - 12
+    shown = text or "(no instruction)"
+    while draw.textlength(shown, font=font) > room and len(shown) > 1:
+        shown = shown[:-2] + "…"
+    draw.text((8, 8), shown, fill=(240, 240, 240), font=font)
+    draw.text((width - 8 - draw.textlength(counter, font=font), 8), counter,
+              fill=(180, 180, 180), font=font)
+    return np.concatenate([frame, np.asarray(band)], axis=0)
 
 
 def write_video(path: str | Path, frames: list[np.ndarray], fps: int) -> None:
