@@ -116,6 +116,10 @@ def test_a_run_folder_is_not_reused_with_other_options(tmp_path):
     out = tmp_path / "run"
     out.mkdir()
     (out / "run.json").write_text(json.dumps(_options().to_json()))
+    (out / "episodes.jsonl").write_text(json.dumps(  # a run that finished an episode
+        {"episode": "scene2/L0/pickup_left_cube#r1", "scene": "scene2", "level": "L0",
+         "task": "scene2/L0/pickup_left_cube", "intent_score": 0.0, "execution_score": 0.0,
+         "complete": False}) + "\n")
     with pytest.raises(EvalRunError, match="rounds differ"):
         evaluate(cached_benchmark(), out, _options(rounds=2), resume=True, progress=False)
     with pytest.raises(EvalRunError, match="already holds a run"):
