@@ -238,8 +238,8 @@ def add_report(commands) -> None:
         "report", help="rebuild a run's report, or compare runs",
         description="With one RUN: rebuild its report (RUN/report.md, report.html, tasks.html "
                     "and the figures in RUN/figures/, SVG and PDF) from its episode records "
-                    "or, for a run that keeps only those (the runs docs/results ships), its "
-                    "scores.csv.gz; a report is never rebuilt from fewer episodes than the "
+                    "or, for a run that keeps only its scores.csv.gz (as the runs in "
+                    "docs/results do), from that file; a report is never rebuilt from fewer episodes than the "
                     "run's summary counts. With several: their Table 1 cells side by side on "
                     "the episodes every run holds (said when they hold different ones), each "
                     "later run's differences from the first and its paired differences with "

@@ -54,7 +54,7 @@ CAPTION_HEIGHT = 28  # px: the band under a captioned frame
 def captioned(frame: np.ndarray, text: str, step: int) -> np.ndarray:
     """The frame over a dark band that gives the text (cut with an ellipsis where it does not
     fit) and the step: what a viewer of an episode's video needs to know at every frame."""
-    height, width = frame.shape[:2]
+    width = frame.shape[1]
     band = Image.new("RGB", (width, CAPTION_HEIGHT), (24, 24, 24))
     draw = ImageDraw.Draw(band)
     font = ImageFont.load_default()
