@@ -26,6 +26,7 @@ from robofollow.data.units import Options
 from robofollow.oracle.score import score
 from robofollow.resources import builtin_specs
 from robofollow.sim.env import RoboFollowEnv
+from robofollow.sim.objects import SHAPE
 from robofollow.sim.video import read_frames
 from tests.sim_helpers import benchmark
 
@@ -58,15 +59,16 @@ def _episodes(root: Path) -> list[dict]:
 def _frames(root: Path, index: int) -> dict[str, np.ndarray]:
     table = pq.read_table(root / f"data/chunk-000/episode_{index:06d}.parquet")
     return {key: np.array(table.column(key).to_pylist(), dtype=np.float32)
-            for key in ("observation.state", "action")}
+            for key in ("observation.state", "observation.environment_state", "action")}
 
 
 def _env(record: dict) -> RoboFollowEnv:
-    """The env on the demonstration's layout and seed (its task's L0 episode, reseeded)."""
+    """The env on the demonstration's layout and seed (its task's L0 episode, reseeded), with
+    the objects observation."""
     episode = find_episode(benchmark(), f"{record['scene']}/L0/{record['label']}#r1")
     assert episode.layout == record["layout"]
     return RoboFollowEnv(episode=episode.model_copy(
-        update={"seed": record["seed"], "instruction": record["tasks"][0]}))
+        update={"seed": record["seed"], "instruction": record["tasks"][0]}), objects=True)
 
 
 def test_a_small_run_validates_with_dataset_check(dataset, capsys):
@@ -81,6 +83,9 @@ def test_a_small_run_validates_with_dataset_check(dataset, capsys):
     assert all(e["tasks"][0] in paraphrases[e["label"]] for e in episodes)
     info = json.loads((dataset / "meta" / "info.json").read_text())
     assert info["features"]["observation.state"]["names"][6] == "left_gripper"
+    assert info["features"]["observation.environment_state"]["shape"] == [SHAPE[0] * SHAPE[1]]
+    stats = json.loads((dataset / "meta" / "episodes_stats.jsonl").open().readline())["stats"]
+    assert len(stats["observation.environment_state"]["mean"]) == SHAPE[0] * SHAPE[1]
     assert (info["robot_type"], info["fps"], info["total_videos"]) == ("aloha_agilex", 25, 18)
     manifest = json.loads((dataset / "manifest.json").read_text())
     assert manifest["options"]["tasks"] == list(TASKS) and manifest["failed"] == []
@@ -114,12 +119,17 @@ def test_replaying_the_actions_open_loop_reproduces_the_demonstration(dataset, i
     frames = _frames(dataset, index)
     env = _env(record)
     obs, _ = env.reset()
-    states = [obs["state"]]
+    states, objects = [obs["state"]], [obs["objects"]]
     for action in frames["action"]:
-        states.append(env.step(action)[0]["state"])
+        obs = env.step(action)[0]
+        states.append(obs["state"])
+        objects.append(obs["objects"])
     trajectory = env.trajectory()
     env.close()
     np.testing.assert_array_equal(np.array(states[:-1]), frames["observation.state"])
+    # the objects observation the dataset records is the one a policy reads at that frame
+    np.testing.assert_array_equal(np.array(objects[:-1]).reshape(len(objects) - 1, -1),
+                                  frames["observation.environment_state"])
     behaviour = Behaviour.model_validate(benchmark().training[record["label"]].model_dump())
     result = score(behaviour, trajectory, benchmark().spec.scenes[record["scene"]])
     assert result.complete and result.intent_score == 1.0 and result.execution_score == 1.0

@@ -28,10 +28,13 @@ from robofollow.data.stats import BINS, QUANTILE_KEYS, array_stats
 from robofollow.files import json_lines
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
+from robofollow.sim.objects import SHAPE as OBJECTS_SHAPE
 from robofollow.sim.video import probe
 
 WIDTH = len(robot.JOINT_NAMES)
-VECTOR_FEATURES = ("observation.state", "action")
+VECTOR_FEATURES = {"observation.state": WIDTH, "action": WIDTH}  # every dataset has them
+# where a dataset declares it: the objects observation, flattened
+OPTIONAL_VECTORS = {"observation.environment_state": int(np.prod(OBJECTS_SHAPE))}
 SCALAR_FEATURES = {"timestamp": "float32", "frame_index": "int64", "episode_index": "int64",
                    "index": "int64", "task_index": "int64"}
 STATS_TOLERANCE = 1e-4  # absolute, on recomputed state/action statistics
@@ -118,6 +121,13 @@ def _load_jsonl(path: Path, report: Report) -> list[dict]:
 
 # -- LeRobot, shared -------------------------------------------------------------------------
 
+def vector_widths(features: dict) -> dict[str, int]:
+    """The vector features a dataset holds, with their widths: state and action, and the
+    optional ones its info declares."""
+    return {**VECTOR_FEATURES, **{key: width for key, width in OPTIONAL_VECTORS.items()
+                                  if key in features}}
+
+
 def _check_info(info: dict, report: Report, required: tuple[str, ...]) -> dict:
     """The feature schema and top-level fields; returns the features (or {})."""
     for key in ("robot_type", "fps", "total_episodes", "total_frames", "total_tasks",
@@ -128,16 +138,16 @@ def _check_info(info: dict, report: Report, required: tuple[str, ...]) -> dict:
     if not isinstance(fps, int | float) or fps <= 0:
         report.error("meta/info.json", f"fps must be a positive number, got {fps!r}")
     features = info.get("features", {})
-    for key in VECTOR_FEATURES:
+    for key, width in vector_widths(features).items():
         feature = features.get(key)
         if feature is None:
             report.error("meta/info.json", f"feature {key!r} is missing")
-        elif (feature.get("dtype"), list(feature.get("shape", []))) != ("float32", [WIDTH]):
-            report.error("meta/info.json", f"{key} must be float32 [{WIDTH}], got "
+        elif (feature.get("dtype"), list(feature.get("shape", []))) != ("float32", [width]):
+            report.error("meta/info.json", f"{key} must be float32 [{width}], got "
                          f"{feature.get('dtype')} {feature.get('shape')}")
-        elif feature.get("names") and len(feature["names"]) != WIDTH:
+        elif feature.get("names") and len(feature["names"]) != width:
             report.error("meta/info.json", f"{key} has {len(feature['names'])} names for "
-                         f"{WIDTH} values")
+                         f"{width} values")
     for key, dtype in SCALAR_FEATURES.items():
         if features.get(key, {}).get("dtype") != dtype:
             report.error("meta/info.json", f"feature {key!r} must be {dtype}")
@@ -149,38 +159,39 @@ def _check_info(info: dict, report: Report, required: tuple[str, ...]) -> dict:
     return features
 
 
-def _vector_column(column: pa.ChunkedArray) -> bool:
-    """Whether a column holds WIDTH float32 values a row: a fixed-size list, as this project
-    and LeRobot's writer store it, or a plain list with WIDTH values in every row, as
+def _vector_column(column: pa.ChunkedArray, width: int) -> bool:
+    """Whether a column holds `width` float32 values a row: a fixed-size list, as this project
+    and LeRobot's writer store it, or a plain list with that many values in every row, as
     LeRobot's v2.1 -> v3.0 converter does."""
     kind = column.type
     if pa.types.is_fixed_size_list(kind):
-        return kind.list_size == WIDTH and kind.value_type == pa.float32()
+        return kind.list_size == width and kind.value_type == pa.float32()
     if not (pa.types.is_list(kind) or pa.types.is_large_list(kind)) \
             or kind.value_type != pa.float32() or column.null_count:
         return False
     lengths = pc.list_value_length(column.combine_chunks()).to_numpy()
-    return bool(np.all(lengths == WIDTH))
+    return bool(np.all(lengths == width))
 
 
 def _check_frames(table: pa.Table, where: str, episode: int, length: int, start: int,
-                  task_index: int, fps: float, report: Report) -> dict[str, np.ndarray]:
+                  task_index: int, fps: float, report: Report,
+                  vectors: dict[str, int]) -> dict[str, np.ndarray]:
     """One episode's frames: columns, dtypes, count, indices, timestamps, finite values.
-    Returns its state and action as [N, WIDTH] arrays, where their columns are of a valid
-    type."""
-    missing = [c for c in VECTOR_FEATURES + tuple(SCALAR_FEATURES) if c not in table.column_names]
+    Returns its vector features (`vectors`: name -> width) as [N, width] arrays, where their
+    columns are of a valid type."""
+    missing = [c for c in (*vectors, *SCALAR_FEATURES) if c not in table.column_names]
     if missing:
         report.error(where, f"missing columns {missing}")
         return {}
     if table.num_rows != length:
         report.error(where, f"{table.num_rows} frames, the episode table says {length}")
     arrays = {}
-    for key in VECTOR_FEATURES:
-        if not _vector_column(table.column(key)):
+    for key, width in vectors.items():
+        if not _vector_column(table.column(key), width):
             report.error(where, f"{key} is {table.schema.field(key).type}, expected "
-                         f"fixed_size_list<float>[{WIDTH}] (or a list of {WIDTH} floats a row)")
+                         f"fixed_size_list<float>[{width}] (or a list of {width} floats a row)")
             continue
-        arrays[key] = table.column(key).combine_chunks().flatten().to_numpy().reshape(-1, WIDTH)
+        arrays[key] = table.column(key).combine_chunks().flatten().to_numpy().reshape(-1, width)
         if not np.all(np.isfinite(arrays[key])):
             report.error(where, f"{key} has non-finite values")
     for key, dtype in SCALAR_FEATURES.items():
@@ -207,8 +218,8 @@ QUANTILE_NOTE = ("the statistics have no quantiles (q01 ... q99): LeRobot's poli
                  "augment_dataset_quantile_stats script adds them")
 
 
-def _check_stored(stats: dict, where: str, report: Report,
-                  quantiles_expected: bool) -> list[str]:
+def _check_stored(stats: dict, where: str, report: Report, quantiles_expected: bool,
+                  vectors: dict[str, int]) -> list[str]:
     """Stored statistics of state, action and images: every statistic present, state and
     action as WIDTH values, images as 3 x 1 x 1 values in [0, 1], min <= q01 <= q10 <= q50 <=
     q90 <= q99 <= max in every dimension. A feature's quantiles are checked when it has one
@@ -216,7 +227,7 @@ def _check_stored(stats: dict, where: str, report: Report,
     (v3.0: LeRobot >= 0.4 writes them, its v2.1 converter and LeRobot 0.3.x did not). Returns
     the features whose statistics are complete and of the right shape."""
     usable = []
-    for key in VECTOR_FEATURES + VIDEO_KEYS:
+    for key in (*vectors, *VIDEO_KEYS):
         stored = stats.get(key)
         if not isinstance(stored, dict):
             report.error(where, f"no statistics for {key}")
@@ -238,8 +249,8 @@ def _check_stored(stats: dict, where: str, report: Report,
         if image and (values.shape[1:] != (3, 1, 1) or values.min() < -STATS_TOLERANCE
                       or values.max() > 1 + STATS_TOLERANCE):
             report.error(where, f"{key} statistics must be 3 x 1 x 1 values in [0, 1]")
-        elif not image and values.shape[1:] != (WIDTH,):
-            report.error(where, f"{key} statistics must be {WIDTH} values each")
+        elif not image and values.shape[1:] != (vectors[key],):
+            report.error(where, f"{key} statistics must be {vectors[key]} values each")
         elif np.any(np.diff(values[:len(quantiles) + 2], axis=0) < -STATS_TOLERANCE):
             report.error(where, f"{key} statistics are not ordered min <= "
                          f"{' <= '.join(quantiles)} <= max")
@@ -249,11 +260,11 @@ def _check_stored(stats: dict, where: str, report: Report,
 
 
 def _check_stats(stats: dict, arrays: dict[str, np.ndarray], where: str, report: Report,
-                 quantiles_expected: bool) -> None:
+                 quantiles_expected: bool, vectors: dict[str, int]) -> None:
     """Stored episode statistics (`_check_stored`), state and action against the frames'
     (`arrays`, from `_check_frames`; a quantile, where stored, within one histogram bin of its
     recomputed estimate)."""
-    for key in _check_stored(stats, where, report, quantiles_expected):
+    for key in _check_stored(stats, where, report, quantiles_expected, vectors):
         if key not in arrays:  # an image, or a column _check_frames reported
             continue
         expected = array_stats(arrays[key])
@@ -308,6 +319,7 @@ def _check_sequence(indices: list, where: str, what: str, report: Report) -> boo
 
 def _check_v21(root: Path, info: dict, report: Report) -> None:
     features = _check_info(info, report, ("video_path", "chunks_size", "total_chunks"))
+    vectors = vector_widths(features)
     meta = root / "meta"
     episodes = _load_jsonl(meta / "episodes.jsonl", report)
     tasks = _load_jsonl(meta / "tasks.jsonl", report)
@@ -336,12 +348,13 @@ def _check_v21(root: Path, info: dict, report: Report) -> None:
             start += length
             continue
         arrays = _check_frames(table, where, index, length, start,
-                               task_index[record["tasks"][0]], fps, report)
+                               task_index[record["tasks"][0]], fps, report, vectors)
         start += length
         if index not in stats:
             report.error(where, "no entry in episodes_stats.jsonl")
         else:
-            _check_stats(stats[index], arrays, where, report, quantiles_expected=False)
+            _check_stats(stats[index], arrays, where, report, quantiles_expected=False,
+                         vectors=vectors)
         for key in VIDEO_KEYS:
             video = root / info["video_path"].format(episode_chunk=chunk, video_key=key,
                                                      episode_index=index)
@@ -395,6 +408,7 @@ def _read_tasks(path: Path, report: Report) -> list[dict] | None:
 
 def _check_v30(root: Path, info: dict, report: Report) -> None:
     features = _check_info(info, report, ("video_path", "chunks_size"))
+    vectors = vector_widths(features)
     meta = root / "meta"
     tasks = _read_tasks(meta / "tasks.parquet", report)
     if tasks is None:
@@ -434,13 +448,13 @@ def _check_v30(root: Path, info: dict, report: Report) -> None:
                                               if table.num_rows else 0)
         frames = table.slice(max(offset, 0), length)
         arrays = _check_frames(frames, where, index, length, start,
-                               task_index[row["tasks"][0]], fps, report)
+                               task_index[row["tasks"][0]], fps, report, vectors)
         stats = {key.split("/")[1]: {} for key in row if key.startswith("stats/")}
         for key, value in row.items():
             if key.startswith("stats/") and value is not None:  # null: another row has it
                 _, feature, stat = key.split("/")
                 stats[feature][stat] = value
-        _check_stats(stats, arrays, where, report, quantiles_expected=True)
+        _check_stats(stats, arrays, where, report, quantiles_expected=True, vectors=vectors)
         start += length
         for key in VIDEO_KEYS:
             video = info["video_path"].format(video_key=key,
@@ -464,7 +478,7 @@ def _check_v30(root: Path, info: dict, report: Report) -> None:
         stats = _load_json(meta / "stats.json", report)
         if stats is not None:
             _check_stored(stats if isinstance(stats, dict) else {}, "meta/stats.json", report,
-                          quantiles_expected=True)
+                          quantiles_expected=True, vectors=vectors)
 
 
 # -- HDF5 ------------------------------------------------------------------------------------
@@ -485,11 +499,15 @@ def _check_hdf5(root: Path, info: dict, report: Report) -> None:
         lengths.append(record["length"])
         try:
             with h5py.File(root / record["file"], "r") as h5:
-                arrays = {name: h5[name] for name in ("action", "observations/qpos")}
-                for name, data in arrays.items():
-                    if data.dtype != np.float32 or data.shape != (record["length"], WIDTH):
+                widths = {"action": WIDTH, "observations/qpos": WIDTH,
+                          **({"observations/environment_state": OPTIONAL_VECTORS[
+                              "observation.environment_state"]}
+                             if "observations/environment_state" in h5 else {})}
+                for name, size in widths.items():
+                    data = h5[name]
+                    if data.dtype != np.float32 or data.shape != (record["length"], size):
                         report.error(where, f"{name} is {data.dtype} {data.shape}, expected "
-                                     f"float32 {(record['length'], WIDTH)}")
+                                     f"float32 {(record['length'], size)}")
                     elif not np.all(np.isfinite(data[()])):
                         report.error(where, f"{name} has non-finite values")
                 for camera in CAMERA_NAMES:

@@ -1,5 +1,6 @@
 """HDF5 datasets for trainers that want raw arrays: one file per demonstration with
-`action` and `observations/qpos` (float32 (N, 14)), `observations/images/<camera>` (uint8
+`action` and `observations/qpos` (float32 (N, 14)), `observations/environment_state` (float32
+(N, objects): the objects observation, flattened), `observations/images/<camera>` (uint8
 (N, H, W, 3)), `instructions` (a JSON list) and the metadata as attributes; `episodes.jsonl`
 and `info.json` beside them."""
 
@@ -11,10 +12,12 @@ from robofollow.data.units import ROBOT_TYPE
 from robofollow.files import link_or_copy, write_json, write_jsonl
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
+from robofollow.sim.objects import FIELDS, SHAPE
 from robofollow.sim.simulation import CONTROL_HZ
 
 VERSION = "robofollow-hdf5-v1"
 EPISODE_PATH = "data/episode_{episode_index:06d}.hdf5"
+OBJECTS = SHAPE[0] * SHAPE[1]  # values of the flattened objects observation
 META_FIELDS = ("label", "scene", "layout", "seed", "spec_digest", "length", "instructions")
 
 
@@ -37,6 +40,9 @@ def write(out: Path, demos: list[tuple[dict, Path]], width: int, height: int,
         "cameras": list(CAMERA_NAMES), "image_shape": [height, width, 3],
         "datasets": {"action": "float32 (N, 14): the joint target sent after observation t",
                      "observations/qpos": "float32 (N, 14): the joint state at t",
+                     "observations/environment_state": (
+                         f"float32 (N, {OBJECTS}): the objects observation at t, rows of "
+                         f"{', '.join(FIELDS)}, flattened"),
                      "observations/images/<camera>": "uint8 (N, H, W, 3) RGB",
                      "instructions": "JSON list of the episode's instructions"}})
     return len(records)

@@ -14,6 +14,7 @@ from robofollow.data.stats import array_stats, as_image_stats
 from robofollow.data.units import ROBOT_TYPE
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
+from robofollow.sim.objects import FIELDS, MAX_OBJECTS
 from robofollow.sim.simulation import CONTROL_HZ
 from robofollow.sim.video import CODEC_NAME, PIXEL_FORMAT
 
@@ -22,6 +23,8 @@ CHUNKS_SIZE = 1000  # files per chunk folder
 VIDEO_KEYS = tuple(image_key(camera) for camera in CAMERA_NAMES)
 INDEX_COLUMNS = ("frame_index", "episode_index", "index", "task_index")
 EXTRA_EPISODE_FIELDS = ("label", "scene", "layout", "seed", "spec_digest")
+ENVIRONMENT_STATE = "observation.environment_state"  # LeRobot's name: the objects observation
+OBJECT_NAMES = tuple(f"object_{row}.{field}" for row in range(MAX_OBJECTS) for field in FIELDS)
 
 
 @dataclass(frozen=True)
@@ -64,6 +67,8 @@ def features(width: int, height: int) -> dict:
     for key in ("observation.state", "action"):
         result[key] = {"dtype": "float32", "shape": [len(robot.JOINT_NAMES)],
                        "names": list(robot.JOINT_NAMES)}
+    result[ENVIRONMENT_STATE] = {"dtype": "float32", "shape": [len(OBJECT_NAMES)],
+                                 "names": list(OBJECT_NAMES)}
     result["timestamp"] = {"dtype": "float32", "shape": [1], "names": None}
     for key in INDEX_COLUMNS:
         result[key] = {"dtype": "int64", "shape": [1], "names": None}
@@ -92,6 +97,8 @@ def frame_table(episode: Episode, arrays: dict[str, np.ndarray], start: int) -> 
     columns = {
         "observation.state": pa.FixedSizeListArray.from_arrays(
             pa.array(arrays["state"].reshape(-1), pa.float32()), width),
+        ENVIRONMENT_STATE: pa.FixedSizeListArray.from_arrays(
+            pa.array(arrays["environment_state"].reshape(-1), pa.float32()), len(OBJECT_NAMES)),
         "action": pa.FixedSizeListArray.from_arrays(
             pa.array(arrays["action"].reshape(-1), pa.float32()), width),
         "timestamp": pa.array((frames / FPS).astype(np.float32)),

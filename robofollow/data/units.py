@@ -20,10 +20,12 @@ import h5py
 import numpy as np
 
 from robofollow.benchmark.episode import Benchmark
+from robofollow.compiler.spec import Scene
 from robofollow.data.jobs import MAX_ATTEMPTS, DemoJob
 from robofollow.data.sinks import ArraySink, FrameSink, VideoSink
 from robofollow.errors import RoboFollowError
 from robofollow.sim import robot
+from robofollow.sim.objects import objects_over
 from robofollow.sim.rollout import ExpertRunner
 from robofollow.sim.simulation import CONTROL_HZ
 from robofollow.trajectory import Trajectory
@@ -41,15 +43,19 @@ class Options:
     height: int
     instructions: str
     spec_digest: str
+    environment_state: bool = True  # the objects observation recorded (older runs: absent)
 
     def to_json(self) -> dict:
         return dict(asdict(self), tasks=list(self.tasks))
 
 
-def dataset_arrays(trajectory: Trajectory) -> dict[str, np.ndarray]:
-    """Observation t is the state before acting; action t is the joint target sent next
-    (the recording's action at t + 1). The final observation has no action and is dropped."""
+def dataset_arrays(trajectory: Trajectory, scene: Scene) -> dict[str, np.ndarray]:
+    """Observation t is the state (and the objects observation, flattened) before acting;
+    action t is the joint target sent next (the recording's action at t + 1). The final
+    observation has no action and is dropped."""
+    objects = objects_over(trajectory, scene)[:-1]
     return {"state": robot.observed_state(trajectory.state[:-1]),
+            "environment_state": objects.reshape(len(objects), -1),
             "action": trajectory.action[1:].astype(np.float32)}
 
 
@@ -119,7 +125,7 @@ class UnitRecorder:
             if not run.achieved:
                 raise RejectedAttemptError("the oracle scored it incomplete: "
                                            + "; ".join(run.score.failures))
-            arrays = dataset_arrays(run.trajectory)
+            arrays = dataset_arrays(run.trajectory, self.compiled.spec.scenes[job.scene])
             length = len(arrays["action"])
             if sink.frames != length:
                 raise RuntimeError(f"{job.key}: {sink.frames} frames for {length} actions")
@@ -139,9 +145,11 @@ class UnitRecorder:
 
 def write_hdf5_arrays(h5, arrays: dict[str, np.ndarray], demo: dict) -> None:
     """The non-image part of an HDF5 episode (upstream's π HDF5 names: `action`,
-    `observations/qpos`), the instructions and the episode's metadata as attributes."""
+    `observations/qpos`; and the objects observation, `observations/environment_state`), the
+    instructions and the episode's metadata as attributes."""
     h5.create_dataset("action", data=arrays["action"])
     h5.create_dataset("observations/qpos", data=arrays["state"])
+    h5.create_dataset("observations/environment_state", data=arrays["environment_state"])
     h5.create_dataset("instructions", data=json.dumps(demo["instructions"]))
     for key in ("label", "scene", "layout", "seed", "spec_digest"):
         h5.attrs[key] = demo[key]

@@ -18,6 +18,7 @@ from robofollow.eval.deadline import PolicyTimeout, check_deadline, deadline
 from robofollow.eval.policy import BadActionError, Policy, Privileged, validate_actions
 from robofollow.oracle.results import EpisodeScore
 from robofollow.sim import CHUNK, MAX_STEPS, robot
+from robofollow.sim.objects import observe_objects
 from robofollow.sim.rollout import Rollout
 from robofollow.sim.stage import Stage
 from robofollow.trajectory import Trajectory
@@ -32,6 +33,7 @@ class EpisodeRun:
     clipped: int  # executed actions with a target past a joint limit (clipped to it)
     error: str | None  # why the policy stopped early, if it did
     seconds: float
+    uses: frozenset[str] = frozenset()  # the observation parts the policy read
 
 
 def observation(uses: frozenset[str], stage: Stage, instruction: str, steps: int,
@@ -43,6 +45,8 @@ def observation(uses: frozenset[str], stage: Stage, instruction: str, steps: int
            "step": steps}
     if "images" in uses:
         obs["images"] = stage.cameras.images()
+    if "objects" in uses:
+        obs["objects"] = observe_objects(sim)
     if privileged is not None:
         obs["privileged"] = privileged
     return obs
@@ -71,11 +75,12 @@ class PolicyRollout(Rollout):
         executed = self.execute(chunk[:CHUNK])
         self.clipped += int(past[:executed].sum())
 
-    def result(self, error: str | None, began: float) -> EpisodeRun:
-        """The recording scored by the oracle; `began`: perf_counter at the episode's start."""
+    def result(self, error: str | None, began: float, uses: frozenset[str]) -> EpisodeRun:
+        """The recording scored by the oracle; `began`: perf_counter at the episode's start;
+        `uses`: what the policy read."""
         score, trajectory = self.finish()
         return EpisodeRun(score, trajectory, self.steps, self.queries, self.clipped, error,
-                          time.perf_counter() - began)
+                          time.perf_counter() - began, uses)
 
 
 def run_episode(compiled: Benchmark, stage: Stage, episode: Episode, policy: Policy | None,
@@ -118,4 +123,4 @@ def run_episode(compiled: Benchmark, stage: Stage, episode: Episode, policy: Pol
             error = f"step {rollout.steps}: {_failure(failure)}"  # not the evaluation)
             break
         rollout.execute_chunk(chunk, past)
-    return rollout.result(error, began)
+    return rollout.result(error, began, uses)

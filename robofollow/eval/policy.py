@@ -8,9 +8,11 @@ A policy is any object with
 
 The observation is a dict: "state" (float32 [14]), "instruction" (str), "step" (int, control
 steps executed so far; a served policy sees it only when its client sends it), and, only when
-the policy uses them, "images" ({cam_high, cam_left_wrist, cam_right_wrist}: (H, W, 3) uint8)
-and "privileged" (a Privileged view of the simulation, for the reference policies). Rendering
-only what a policy uses keeps image-free policies fast.
+the policy uses them, "images" ({cam_high, cam_left_wrist, cam_right_wrist}: (H, W, 3) uint8),
+"objects" (float32 [MAX_OBJECTS, len(FIELDS)]: every body's kind, size, colour, position and
+yaw, as a perfect perception module would report them, in an order that carries no identity;
+sim/objects.py) and "privileged" (a Privileged view of the simulation, for the reference
+policies). Rendering only what a policy uses keeps image-free policies fast.
 """
 
 from __future__ import annotations
@@ -27,7 +29,7 @@ from robofollow.errors import RoboFollowError
 from robofollow.sim import robot
 from robofollow.sim.simulation import Simulation
 
-OBSERVATION_PARTS = frozenset({"state", "instruction", "images", "privileged"})
+OBSERVATION_PARTS = frozenset({"state", "instruction", "images", "objects", "privileged"})
 ACTION_WIDTH = len(robot.JOINT_NAMES)
 
 

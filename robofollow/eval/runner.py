@@ -170,7 +170,7 @@ def result_record(episode: Episode, instruction: str, run: EpisodeRun) -> dict:
         "executed_behaviour": (score.executed_behaviour.model_dump(mode="json")
                                if score.executed_behaviour else None),
         "steps": run.steps, "queries": run.queries, "clipped": run.clipped, "error": run.error,
-        "seconds": round(run.seconds, 3),
+        "seconds": round(run.seconds, 3), "observed": sorted(run.uses),
         "hashes": {"episode": episode.hash, "split": episode.split,
                    "instruction": _digest(instruction.encode()),
                    "initial_state": _digest(start),
@@ -280,8 +280,12 @@ def summary(results: list[dict], options: EvalOptions) -> dict:
     splits: dict[str, set] = {}
     for record in ordered:
         splits.setdefault(record["scene"], set()).add(record.get("hashes", {}).get("split"))
+    observed = sorted({part for record in ordered for part in record.get("observed", ())})
     return {"policy": options.policy, "instruction_mode": options.instruction_mode,
             "episodes": len(results),
+            # what the policy read (records that say); "objects" without "images": the
+            # objects observation stood in for perception (perception removed)
+            "observed": observed,
             "splits": {scene: sorted(d for d in digests if d) for scene, digests in
                        splits.items()},  # each scene's split digest (records that carry one)
             **table(ordered),

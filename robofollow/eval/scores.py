@@ -6,7 +6,8 @@ A row holds the episode id, its hash (what pairs two runs' episodes), its scene'
 the task's motion, Intent, Execution, completion, the hash of its realised start on a grid
 (runner.start_hash); then what the report reads: the layout, seed, chance and followed
 Intent, what the policy did and its first failed stage (outcomes.py), clipped actions, steps,
-the policy error, the video and the task's instruction. Files written before a column was
+the policy error, the video, the task's instruction and the observation parts the policy
+read. Files written before a column was
 added lack it (COLUMNS after the first seven). Byte-identical for the same records."""
 
 from __future__ import annotations
@@ -23,8 +24,8 @@ from robofollow.files import write_bytes_atomic
 SCORES = "scores.csv.gz"
 COLUMNS = ("episode", "hash", "split", "motion", "intent", "execution", "complete", "start",
            "layout", "seed", "chance_is", "chance_cr", "followed", "did", "failed", "reason",
-           "clipped", "steps", "error", "video", "instruction")
-REPORTED = COLUMNS[8:]  # what a report rebuilt from the file needs beyond the scores
+           "clipped", "steps", "error", "video", "instruction", "observed")
+REPORTED = COLUMNS[8:-1]  # what a report rebuilt from the file needs beyond the scores
 
 
 def score_rows(results: list[dict]) -> list[dict]:
@@ -47,7 +48,8 @@ def _row(r: dict) -> dict:
             "failed": failed[0] if failed else "", "reason": failed[1] if failed else "",
             "clipped": r.get("clipped", 0), "steps": r.get("steps", ""),
             "error": r.get("error") or "", "video": r.get("video") or "",
-            "instruction": r.get("task_instruction") or r.get("instruction") or ""}
+            "instruction": r.get("task_instruction") or r.get("instruction") or "",
+            "observed": ",".join(r.get("observed", ()))}
 
 
 def _number(value: float | None) -> str:
@@ -108,4 +110,6 @@ def _record(row: dict) -> dict:
         error=row["error"] or None, task_instruction=row["instruction"] or None)
     if row["video"]:
         record["video"] = row["video"]
+    if row.get("observed"):
+        record["observed"] = row["observed"].split(",")
     return record

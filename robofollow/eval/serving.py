@@ -29,6 +29,7 @@ from robofollow.eval.limits import IDLE_TIMEOUT_S, MAX_CLIENTS, MAX_MESSAGE_BYTE
 from robofollow.eval.loading import load_policy
 from robofollow.eval.policy import ACTION_WIDTH, Privileged, server_text
 from robofollow.sim.cameras import CAMERA_NAMES, IMAGE_HEIGHT, IMAGE_WIDTH
+from robofollow.sim.objects import FIELDS, SHAPE
 from robofollow.sim.stage import Stage
 
 log = logging.getLogger("robofollow.serve")
@@ -67,6 +68,8 @@ def observation_layout(uses: frozenset, channels_first: bool) -> dict:
     if "images" in uses:
         layout["images"] = {camera: {"dtype": "uint8", "shape": image_shape(channels_first)}
                             for camera in CAMERA_NAMES}
+    if "objects" in uses:
+        layout["objects"] = {"dtype": "float32", "shape": list(SHAPE), "fields": list(FIELDS)}
     return layout
 
 
@@ -102,6 +105,17 @@ def checked_images(images, channels_first: bool, names: dict[str, str] | None = 
     return checked
 
 
+def _checked_objects(objects, spec: str) -> np.ndarray:
+    if objects is None:
+        raise RequestError(f"policy {spec!r} reads the objects observation and the "
+                           "observation has none ('objects')")
+    if not (isinstance(objects, np.ndarray) and objects.dtype == np.float32
+            and objects.shape == SHAPE):
+        raise RequestError(f"'objects' must be float32 {list(SHAPE)} (one row per body: "
+                           f"{', '.join(FIELDS)}); got {_shape_text(objects)}")
+    return objects
+
+
 class ServedPolicy:
     """One policy instance behind a server, with the observation checks and episode
     boundaries of the serving protocol."""
@@ -125,10 +139,11 @@ class ServedPolicy:
         self.start, self.acted = None, False
 
     def act(self, state, instruction: str, images: dict | None, privileged: dict | None,
-            step: int | None = None) -> np.ndarray:
+            step: int | None = None, objects=None) -> np.ndarray:
         """`images`: {camera: (H, W, 3) uint8}, checked (`checked_images`); `privileged`:
         {scene, layout, seed}; `step`: control steps executed so far, None when the client
-        does not say (a step of 0 begins a new episode)."""
+        does not say (a step of 0 begins a new episode); `objects`: the objects observation
+        (float32 objects.SHAPE)."""
         state = _checked_state(state)
         if not isinstance(instruction, str):
             raise RequestError("the instruction ('prompt') must be a string")
@@ -145,6 +160,8 @@ class ServedPolicy:
                 raise RequestError(f"policy {self.spec!r} reads the camera images and the "
                                    "observation has none")
             obs["images"] = images
+        if "objects" in self.policy.uses:
+            obs["objects"] = _checked_objects(objects, self.spec)
         if "privileged" in self.policy.uses:
             if privileged is None:
                 raise RequestError(

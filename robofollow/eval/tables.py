@@ -55,10 +55,19 @@ def table_text(summary: dict) -> str:
     if "followed_IS" in references and references["followed_IS"] < 100:
         lines += _wrapped("Followed", f"IS {references['followed_IS']:.1f}   (perfectly "
                           "following the instructions given)")
+    if perception_removed(summary):
+        lines += _wrapped("Perception", "removed: the policy read the objects observation "
+                          "(ground truth), not camera images")
     if any(c["episodes"] < FEW for row in cells.values() for c in row.values()):
         lines += _wrapped(MARK, f"fewer than {FEW} episodes: read the cell with its 95% "
                           "interval over tasks, in the report")
     return "\n".join(line.rstrip() for line in lines)
+
+
+def perception_removed(summary: dict) -> bool:
+    """Whether the run's policy read the objects observation instead of camera images."""
+    observed = summary.get("observed", ())
+    return "objects" in observed and "images" not in observed
 
 
 def _motion_rows(row: dict, levels: list[str]) -> list[str]:

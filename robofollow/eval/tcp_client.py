@@ -96,6 +96,8 @@ class TcpPolicy:
                "instruction": observation["instruction"]}
         if self.robofollow and "step" in observation:
             obs["step"] = int(observation["step"])
+        if "objects" in observation:
+            obs["objects"] = np.asarray(observation["objects"], dtype=np.float32)
         if "privileged" in observation and self.allow_privileged:
             obs["privileged"] = privileged_message(observation["privileged"])
         return self._call("predict", obs)  # checked by the episode (validate_actions)

@@ -12,6 +12,7 @@ its reply is the [T, 14] absolute joint targets. A message over the receiving en
 Extensions only between RoboFollow ends: the server answers reset with {"robofollow":
 {version, uses, observation}} (upstream servers answer None), and then the client sends only
 the parts the policy uses, "step" (control steps executed so far) in each predict observation,
+"objects" (the objects observation, float32 [MAX_OBJECTS, fields]) for a policy that reads it,
 and "privileged" = {scene, layout, seed} in a reference policy's predict observations where
 the user allowed it (`robofollow eval --allow-privileged`). Any client may send "step"; a step
 of 0 after others begins a new episode.

@@ -106,7 +106,7 @@ class _Session:
                                     where="predict's 'observation'")
         return self.served.act(obs["joint_action"].get("vector"),
                                obs.get("instruction", self.instruction), images,
-                               obs.get("privileged"), obs.get("step"))
+                               obs.get("privileged"), obs.get("step"), obs.get("objects"))
 
     def close(self) -> None:
         if self.served is not None:

@@ -12,7 +12,8 @@ with the reason, without retrying.
 Extensions only between RoboFollow ends (an openpi server never sees them): a server whose
 metadata carries "robofollow" accepts {"reset": true} at an episode start, receives "step"
 (control steps executed so far) with each observation, declares the observation parts its
-policy uses, and for a privileged (reference) policy receives "privileged" = {scene, layout,
+policy uses, receives "objects" (float32 [MAX_OBJECTS, fields]) for a policy that reads the
+objects observation, and for a privileged (reference) policy receives "privileged" = {scene, layout,
 seed}, from which it rebuilds the same start state itself, where the user allowed it
 (`robofollow eval --allow-privileged`). Any client may send "step"; a step of 0 after others
 begins a new episode.
@@ -154,6 +155,8 @@ class WebsocketPolicy:
         if "images" in observation:
             message["images"] = {camera: np.ascontiguousarray(image.transpose(2, 0, 1))
                                  for camera, image in observation["images"].items()}
+        if "objects" in observation:
+            message["objects"] = np.asarray(observation["objects"], dtype=np.float32)
         if "privileged" in observation and self.allow_privileged:
             message["privileged"] = privileged_message(observation["privileged"])
         reply = self._call(message)

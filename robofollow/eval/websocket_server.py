@@ -77,7 +77,8 @@ class PolicyServer:
                     if images is not None and "images" in self.pool.uses:
                         images = checked_images(images, channels_first=True)
                     actions = served.act(message["state"], message.get("prompt", ""), images,
-                                         message.get("privileged"), message.get("step"))
+                                         message.get("privileged"), message.get("step"),
+                                         message.get("objects"))
                     reply = packb({"actions": actions})
                 except Exception as error:  # openpi's way: a text message, then close
                     if isinstance(error, WireError):

@@ -6,7 +6,9 @@
     obs, reward, terminated, truncated, info = env.step(action)   # 14-D joint targets
 
 Observation: {"images": {cam_high, cam_left_wrist, cam_right_wrist} (H, W, 3) uint8,
-"state": 14-D joints (grippers normalised, 1 open), "instruction": the episode's text}.
+"state": 14-D joints (grippers normalised, 1 open), "instruction": the episode's text}, and
+with `objects=True` "objects": the objects observation (sim/objects.py: every body's kind, size,
+colour, position and yaw, ground truth, in an order that carries no identity).
 `reset()` plays the env's `episode`, else one drawn (with the env's seeded generator) from
 the episodes of `scene` and `level` (None: all). The episode fixes layout, instruction and
 jitter seed; `reset(seed=...)` overrides the seed. The compiled benchmark comes from the on-disk
@@ -30,6 +32,8 @@ from robofollow.benchmark.episode import Episode
 from robofollow.resources import builtin_specs
 from robofollow.sim import MAX_STEPS, robot
 from robofollow.sim.cameras import CAMERA_NAMES, Cameras
+from robofollow.sim.objects import SHAPE as OBJECTS_SHAPE
+from robofollow.sim.objects import observe_objects
 from robofollow.sim.recorder import Recorder
 from robofollow.sim.simulation import CONTROL_HZ, Simulation
 from robofollow.sim.stage import Stage
@@ -44,20 +48,23 @@ class RoboFollowEnv(gym.Env):
     def __init__(self, episode: str | Episode | None = None, specs: str | Path | None = None,
                  width: int = 320, height: int = 240, max_steps: int = MAX_STEPS,
                  render_mode: str | None = "rgb_array", scene: str | None = None,
-                 level: str | None = None):
+                 level: str | None = None, objects: bool = False):
         self.benchmark = compiled_cache.load(Path(specs) if specs else builtin_specs())
         self.choices = self.benchmark.select(scene, level)  # what reset() draws from
         self.default_episode = self._episode(episode) if episode else None
         self.width, self.height, self.max_steps = width, height, max_steps
-        self.render_mode = render_mode
+        self.render_mode, self.objects = render_mode, objects
         image = spaces.Box(0, 255, (height, width, 3), np.uint8)
-        self.observation_space = spaces.Dict({
+        parts = {
             "images": spaces.Dict({name: image for name in CAMERA_NAMES}),
             "state": spaces.Box(robot.ACTION_LOW.astype(np.float32),
                                 robot.ACTION_HIGH.astype(np.float32), dtype=np.float32),
             "instruction": spaces.Text(max_length=1000, min_length=0,
                                        charset=INSTRUCTION_CHARSET),
-        })
+        }
+        if objects:
+            parts["objects"] = spaces.Box(-np.inf, np.inf, OBJECTS_SHAPE, np.float32)
+        self.observation_space = spaces.Dict(parts)
         self.action_space = spaces.Box(robot.ACTION_LOW.astype(np.float32),
                                        robot.ACTION_HIGH.astype(np.float32), dtype=np.float32)
         self.stage = Stage(width, height)  # the current layout's simulation and cameras
@@ -100,8 +107,12 @@ class RoboFollowEnv(gym.Env):
         return self._observation(), 0.0, False, truncated, self._info()
 
     def _observation(self) -> dict:
-        return {"images": self.cameras.images(), "state": robot.observed_state(self.sim.state()),
-                "instruction": self.episode.instruction}
+        found = {"images": self.cameras.images(),
+                 "state": robot.observed_state(self.sim.state()),
+                 "instruction": self.episode.instruction}
+        if self.objects:
+            found["objects"] = observe_objects(self.sim)
+        return found
 
     def _info(self) -> dict:
         return {"episode": self.episode.id, "scene": self.episode.scene,
