@@ -98,6 +98,9 @@ def test_vla_eval_runs_robofollow_episodes_scored_as_robofollow_eval_scores_them
         metrics = dict(got["metrics"])
         assert metrics.pop("success") is want["complete"]
         assert metrics.pop("seconds") >= 0 and want.pop("seconds") >= 0
+        # what a model server reads, against what the reference policies read in process
+        assert metrics.pop("observed") == ["images", "instruction", "state"]
+        want.pop("observed")
         if got is replayed:  # the expert's own chunks are of other lengths
             assert (metrics.pop("queries"), want.pop("queries")) == (3, run.queries)
         assert metrics == want

@@ -153,7 +153,7 @@ class RoboFollowBenchmark(StepBenchmark):
         """The `robofollow eval` episode record, scored by the oracle, with success."""
         from robofollow.eval.runner import episode_record
 
-        run = self._rollout.result(self._error, self._began)
+        run = self._rollout.result(self._error, self._began, IMAGE_POLICY_USES)
         record = episode_record(self.compiled, self._rollout.episode, self._instruction, run)
         return {"success": bool(record["complete"]), **record}
 
