@@ -13,10 +13,12 @@ from robofollow.cli import main
 from robofollow.learn import checkpoint
 from robofollow.learn.demos import downsample, read_demonstrations
 from robofollow.learn.model import Architecture, forward, init
+from robofollow.learn.options import KINDS
 from robofollow.learn.policy import load_baseline
 from robofollow.learn.tokens import UNKNOWN, encode, vocabulary, words
 from robofollow.learn.train import TrainOptions, train
 from robofollow.oracle.metrics import wilson
+from robofollow.sim.objects import SHAPE as OBJECTS_SHAPE
 
 TASKS = "pickup_left_cube,pickup_right_cube"
 
@@ -61,27 +63,40 @@ def test_tokens_read_words_forms_or_nothing():
     assert ids[0] == vocab.index("use") and ids[2] == UNKNOWN and ids[4] == 0
 
 
-@pytest.mark.parametrize("kind", ["text", "blind", "form"])
+@pytest.mark.parametrize("kind", KINDS)
 def test_numpy_and_jax_networks_agree(kind):
     jax = pytest.importorskip("jax")
     from robofollow.learn.train import _jax_conv
 
-    arch = Architecture(kind, ("cam_high", "cam_left_wrist"), (30, 40), 12, chunk=5)
+    reads_objects = kind.startswith("objects-")
+    arch = Architecture(kind, () if reads_objects else ("cam_high", "cam_left_wrist"),
+                        (30, 40), 12, chunk=5)
     params = init(arch, seed=3)
     rng = np.random.default_rng(0)
     images = {c: rng.integers(0, 256, (2, 30, 40, 3), dtype=np.uint8) for c in arch.cameras}
+    objects = rng.standard_normal((2, *OBJECTS_SHAPE)).astype(np.float32)
+    objects[:, :, 0] = np.arange(OBJECTS_SHAPE[0]) < [[5], [7]]  # 5 and 7 bodies present
+    objects[:, :, 1:] *= objects[:, :, :1]
     state = rng.standard_normal((2, 14)).astype(np.float32)
     tokens = np.array([[2, 5, 7, 0], [3, 0, 0, 0]], np.int32)
-    by_numpy = forward(params, arch, images, state, tokens)
+    by_numpy = forward(params, arch, images, state, tokens, objects=objects)
     by_jax = np.asarray(forward(params, arch, images, state, tokens, xp=jax.numpy,
-                                conv=_jax_conv))
+                                conv=_jax_conv, objects=objects))
     assert by_numpy.shape == (2, 5, 14)
     np.testing.assert_allclose(by_numpy, by_jax, rtol=1e-4, atol=1e-4)
     other = tokens.copy()
     other[0, 1] = 9
-    changed = forward(params, arch, images, state, other)
+    changed = forward(params, arch, images, state, other, objects=objects)
     assert np.allclose(changed[1], by_numpy[1])
     assert np.allclose(changed[0], by_numpy[0]) == (kind == "blind")
+    if reads_objects:  # the bodies' order carries nothing; a padding row changes nothing
+        shuffled = objects.copy()
+        shuffled[0, :5] = objects[0, [3, 0, 4, 1, 2]]
+        padded = shuffled.copy()
+        padded[0, 9, 1:] = 5.0  # under a row marked absent
+        for seen in (shuffled, padded):
+            np.testing.assert_allclose(forward(params, arch, images, state, tokens,
+                                               objects=seen), by_numpy, rtol=1e-5, atol=1e-5)
 
 
 @pytest.mark.slow
@@ -116,7 +131,7 @@ def test_resumed_training_equals_an_uninterrupted_one(dataset, tmp_path):
 
 @pytest.mark.slow
 def test_generate_train_evaluate_every_baseline(dataset, tmp_path):
-    for kind in ("text", "blind", "form"):
+    for kind in KINDS:
         ckpt, run = tmp_path / kind, tmp_path / f"run-{kind}"
         assert main(["train", str(dataset), "--policy", kind, "--out", str(ckpt), "--steps",
                      "3", "--batch", "8", "--factor", "1", "--val-fraction", "0.5",
@@ -132,11 +147,25 @@ def test_generate_train_evaluate_every_baseline(dataset, tmp_path):
         summary = json.loads((run / "summary.json").read_text())
         cell = summary["cells"]["scene2"]["L0"]
         assert cell["ci95"]["IS"][0] <= cell["IS"] <= cell["ci95"]["IS"][1]
+        seen = "objects" if kind.startswith("objects-") else "images"
+        assert summary["observed"] == sorted(["instruction", "state", seen])
     policy = load_baseline(str(tmp_path / "text"))
     observation = {"state": np.zeros(14), "instruction": "Pick up the left cube.",
                    "images": {"cam_high": np.full((240, 320, 3), 90, np.uint8)}}
     chunk = policy.act(observation)
     assert chunk.shape == (25, 14) and np.array_equal(chunk, policy.act(observation))
+    # an objects baseline served over the websocket protocol: the client sends what it reads
+    from robofollow.eval.websocket_server import PolicyServer
+    from tests.server_helpers import served
+    from tests.sim_helpers import benchmark
+
+    with served(PolicyServer(benchmark(), str(tmp_path / "objects-text"))) as port:
+        assert main(["eval", "--policy", f"ws://127.0.0.1:{port}", "--out",
+                     str(tmp_path / "served"), "--tasks", "scene2/L0/pickup_right_cube",
+                     "--rounds", "1", "--workers", "1", "--quiet"]) == 0
+    summary = json.loads((tmp_path / "served" / "summary.json").read_text())
+    assert summary["observed"] == ["instruction", "objects", "state"]
+    assert summary["policy_failures"]["episodes"] == 0
 
 
 @pytest.mark.slow

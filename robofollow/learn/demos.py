@@ -1,6 +1,7 @@
 """Reading a RoboFollow LeRobot dataset (v2.1 or v3.0, as `robofollow generate` writes it) for
-training: every frame's joint state and action, each episode's instruction and task label, and
-the chosen cameras' frames, decoded with PyAV and shrunk by an integer factor (area average).
+training: every frame's joint state and action, each episode's instruction and task label, the
+chosen cameras' frames, decoded with PyAV and shrunk by an integer factor (area average), and,
+where asked, every frame's objects observation (`observation.environment_state`).
 
 Decoded frames are cached as .npy files keyed by the dataset's identity, so a second training
 run on the same dataset (or a resumed one) skips decoding.
@@ -21,10 +22,11 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from robofollow.data import lerobot_v21, lerobot_v30
-from robofollow.data.lerobot import vectors
+from robofollow.data.lerobot import ENVIRONMENT_STATE, vectors
 from robofollow.data.sinks import image_key
 from robofollow.errors import RoboFollowError
 from robofollow.files import json_lines
+from robofollow.sim.objects import SHAPE as OBJECTS_SHAPE
 
 
 class DatasetError(RoboFollowError):
@@ -41,6 +43,7 @@ class Demonstrations:
     instructions: list[str]  # per episode
     labels: list[str]  # per episode: the training task
     images: dict[str, np.ndarray]  # camera -> [N, H, W, 3] uint8
+    objects: np.ndarray | None = None  # [N, rows, fields] float32, where read
 
     @property
     def episodes(self) -> int:
@@ -61,8 +64,10 @@ def downsample(images: np.ndarray, factor: int) -> np.ndarray:
 
 
 def read_demonstrations(root: Path, cameras: tuple[str, ...], factor: int,
-                        progress=None, cache: Path | None = None) -> Demonstrations:
-    """The dataset under `root`; `progress(n)` is called as episodes' frames are decoded."""
+                        progress=None, cache: Path | None = None,
+                        objects: bool = False) -> Demonstrations:
+    """The dataset under `root`; `progress(n)` is called as episodes' frames are decoded;
+    `objects`: read the objects observation too."""
     info = _json(root / "meta" / "info.json")
     version = info.get("codebase_version")
     if version == lerobot_v21.VERSION:
@@ -71,7 +76,7 @@ def read_demonstrations(root: Path, cameras: tuple[str, ...], factor: int,
         episodes = _v30_episodes(root)
     else:
         raise DatasetError(f"{root}: codebase_version {version!r} is not v2.1 or v3.0")
-    frames = _frames(root)
+    frames = _frames(root, objects)
     starts = np.cumsum([0] + [e["length"] for e in episodes[:-1]]).astype(np.int64)
     lengths = np.array([e["length"] for e in episodes], np.int64)
     if len(frames["index"]) != lengths.sum():
@@ -81,7 +86,8 @@ def read_demonstrations(root: Path, cameras: tuple[str, ...], factor: int,
               for camera in cameras}
     return Demonstrations(frames["state"], frames["action"], starts, lengths,
                           [e["tasks"][0] for e in episodes],
-                          [e.get("label", e["tasks"][0]) for e in episodes], images)
+                          [e.get("label", e["tasks"][0]) for e in episodes], images,
+                          frames.get("objects"))
 
 
 def _json(path: Path) -> dict:
@@ -114,19 +120,26 @@ def _v30_episodes(root: Path) -> list[dict]:
     return sorted(rows, key=lambda e: e["episode_index"])
 
 
-def _frames(root: Path) -> dict[str, np.ndarray]:
+def _frames(root: Path, objects: bool) -> dict[str, np.ndarray]:
     files = sorted((root / "data").rglob("*.parquet"))
     if not files:
         raise DatasetError(f"{root}/data: no parquet files")
+    columns = ["observation.state", "action", "index"] + ([ENVIRONMENT_STATE] if objects else [])
     try:
-        table = pa.concat_tables(pq.read_table(f, columns=["observation.state", "action",
-                                                          "index"]) for f in files)
-    except (OSError, pa.ArrowException) as error:
-        raise DatasetError(f"{root}/data: {error}") from None
+        table = pa.concat_tables(pq.read_table(f, columns=columns) for f in files)
+    except (OSError, pa.ArrowException, KeyError) as error:
+        lacks = objects and ENVIRONMENT_STATE in str(error)
+        raise DatasetError(f"{root}/data: " + (
+            f"no {ENVIRONMENT_STATE} (the objects observation; datasets generated before it "
+            "lack it: generate it again)" if lacks else str(error))) from None
     table = table.sort_by("index")
-    return {"state": vectors(table.column("observation.state")).astype(np.float32),
-            "action": vectors(table.column("action")).astype(np.float32),
-            "index": table.column("index").to_numpy()}
+    found = {"state": vectors(table.column("observation.state")).astype(np.float32),
+             "action": vectors(table.column("action")).astype(np.float32),
+             "index": table.column("index").to_numpy()}
+    if objects:
+        found["objects"] = vectors(table.column(ENVIRONMENT_STATE)).astype(
+            np.float32).reshape(-1, *OBJECTS_SHAPE)
+    return found
 
 
 def _video_segments(root: Path, info: dict, episodes: list[dict], camera: str):

@@ -6,6 +6,9 @@ policy (no training stack needed), JAX trains it (`robofollow.learn.train`).
     [image features, joint state, instruction] -> MLP -> a chunk of CHUNK x 14 joint targets
 
 `blind` is the same network without the instruction: no token encoder and no FiLM.
+`objects-text` and `objects-form` read the objects observation instead of images (perception
+removed): each body's row -> a 2-layer MLP -> FiLM by the instruction; then the instruction
+attends over the bodies (one query, masked softmax) beside their masked mean.
 Parameters are a flat dict of float32 arrays; everything is normalised (images to [-0.5, 0.5],
 state and actions by the dataset's mean and standard deviation).
 """
@@ -20,13 +23,16 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from robofollow.learn.tokens import MAX_TOKENS
 from robofollow.sim import CHUNK
+from robofollow.sim.objects import FIELDS
 
 ACTION_WIDTH = 14
+OBJECTS_PREFIX = "objects-"  # a kind that reads the objects observation, then its language
+OBJECT_FIELDS = len(FIELDS)
 
 
 @dataclass(frozen=True)
 class Architecture:
-    kind: str  # text | blind | form
+    kind: str  # text | blind | form | objects-text | objects-form
     cameras: tuple[str, ...]
     image_shape: tuple[int, int]  # (height, width) after shrinking
     vocab_size: int
@@ -41,6 +47,11 @@ class Architecture:
     def reads_instruction(self) -> bool:
         return self.kind != "blind"
 
+    @property
+    def reads_objects(self) -> bool:
+        """The objects observation instead of camera images."""
+        return self.kind.startswith(OBJECTS_PREFIX)
+
     def to_dict(self) -> dict:
         return asdict(self)
 
@@ -48,6 +59,15 @@ class Architecture:
     def from_dict(cls, data: dict) -> Architecture:
         return cls(**{key: tuple(value) if isinstance(value, list) else value
                       for key, value in data.items()})
+
+
+def normalised_objects(objects: np.ndarray, normalization: dict) -> np.ndarray:
+    """The objects observation [..., rows, fields] standardised by the dataset's field means
+    and deviations (over the bodies present), its `present` column kept and padding rows 0."""
+    objects = np.asarray(objects, np.float32)
+    present = objects[..., :1]
+    scaled = (objects - normalization["objects_mean"]) / normalization["objects_std"]
+    return np.concatenate([present, scaled[..., 1:] * present], axis=-1)
 
 
 def init(arch: Architecture, seed: int) -> dict[str, np.ndarray]:
@@ -72,6 +92,14 @@ def init(arch: Architecture, seed: int) -> dict[str, np.ndarray]:
         if arch.reads_instruction:
             dense(f"{camera}.film", arch.embed, 2 * fan_in, scale=0.1)
         features += 3 * fan_in
+    if arch.reads_objects:
+        d = arch.embed
+        dense("objects.in", OBJECT_FIELDS, d)
+        dense("objects.hidden", d, d)
+        dense("objects.film", d, 2 * d, scale=0.1)
+        for name in ("query", "key", "value"):
+            dense(f"objects.{name}", d, d, scale=0.5)
+        features += 2 * d
     if arch.reads_instruction:
         d = arch.embed
         params["tokens.embed"] = (rng.standard_normal((arch.vocab_size, d)) * 0.1).astype(
@@ -96,9 +124,10 @@ def numpy_conv(x: np.ndarray, w: np.ndarray, stride: int) -> np.ndarray:
 
 
 def forward(params: dict, arch: Architecture, images: dict, state, tokens, xp=np,
-            conv=numpy_conv):
+            conv=numpy_conv, objects=None):
     """Normalised action chunks [B, chunk, 14] from uint8 images {camera: [B, H, W, 3]},
-    normalised state [B, 14] and token ids [B, L] (ignored by `blind`)."""
+    normalised state [B, 14], token ids [B, L] (ignored by `blind`) and, for the objects
+    kinds, the objects observation [B, rows, fields]."""
     def dense(name, x):
         return x @ params[f"{name}.w"] + params[f"{name}.b"]
 
@@ -115,6 +144,8 @@ def forward(params: dict, arch: Architecture, images: dict, state, tokens, xp=np
                 x = x * (1.0 + scale[:, None, None, :]) + shift[:, None, None, :]
             x = xp.maximum(x, 0.0)
         parts.append(_spatial_features(x, xp))
+    if arch.reads_objects:
+        parts.append(_object_features(params, arch, objects, text, xp, dense))
     if text is not None:
         parts.append(text)
     parts.append(xp.asarray(state, dtype=xp.float32))
@@ -122,6 +153,25 @@ def forward(params: dict, arch: Architecture, images: dict, state, tokens, xp=np
     x = xp.maximum(dense("trunk0", x), 0.0)
     x = xp.maximum(dense("trunk1", x), 0.0)
     return dense("head", x).reshape(x.shape[0], arch.chunk, ACTION_WIDTH)
+
+
+def _object_features(params, arch, objects, text, xp, dense):
+    """The bodies encoded row by row and modulated by the instruction; then what the
+    instruction attends to among them, and their mean ([B, 2 * embed])."""
+    objects = xp.asarray(objects, dtype=xp.float32)
+    mask = objects[..., 0]  # the `present` column
+    h = xp.maximum(dense("objects.in", objects), 0.0)
+    h = xp.maximum(dense("objects.hidden", h), 0.0)
+    scale, shift = xp.split(dense("objects.film", text), 2, axis=-1)
+    h = h * (1.0 + scale[:, None, :]) + shift[:, None, :]
+    query = dense("objects.query", text)  # [B, d]
+    logits = xp.einsum("bd,brd->br", query, dense("objects.key", h)) / math.sqrt(arch.embed) \
+        + (mask - 1.0) * 1e9
+    weights = xp.exp(logits - logits.max(axis=-1, keepdims=True)) * mask
+    weights = weights / xp.maximum(weights.sum(axis=-1, keepdims=True), 1e-9)
+    attended = xp.einsum("br,brd->bd", weights, dense("objects.value", h))
+    mean = (h * mask[..., None]).sum(axis=1) / xp.maximum(mask.sum(axis=1, keepdims=True), 1.0)
+    return xp.concatenate([attended, mean], axis=-1)
 
 
 def _spatial_features(x, xp):

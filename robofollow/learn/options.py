@@ -8,7 +8,9 @@ from dataclasses import asdict, dataclass
 from robofollow.errors import RoboFollowError
 from robofollow.sim import CHUNK
 
-KINDS = ("text", "blind", "form")  # what the network reads of the instruction (tokens.py)
+# what the network reads: camera images, or the objects observation (perception removed); and
+# of the instruction its words, its logical form (tokens.py) or nothing
+KINDS = ("text", "blind", "form", "objects-text", "objects-form")
 
 
 class TrainingError(RoboFollowError):
@@ -35,6 +37,16 @@ class TrainOptions:
 
     def to_dict(self) -> dict:
         return asdict(self)
+
+    @property
+    def reads_objects(self) -> bool:
+        """The objects observation instead of camera images (perception removed)."""
+        return self.kind.startswith("objects-")
+
+    @property
+    def image_cameras(self) -> tuple[str, ...]:
+        """The cameras the network reads: none for the objects kinds."""
+        return () if self.reads_objects else self.cameras
 
     def check(self) -> None:
         """TrainingError naming the first option out of its range."""

@@ -12,19 +12,21 @@ import numpy as np
 
 from robofollow.learn import checkpoint
 from robofollow.learn.demos import downsample
-from robofollow.learn.model import forward
+from robofollow.learn.model import forward, normalised_objects
 from robofollow.learn.tokens import encode
 
 SHIPPED = Path(__file__).resolve().parent.parent / "baselines"
 
 
 class BaselinePolicy:
-    """Predicts a chunk of joint targets from the cameras, the joint state and (unless blind)
-    the instruction; returns the first `execute` actions of it."""
+    """Predicts a chunk of joint targets from the cameras (or the objects observation), the
+    joint state and (unless blind) the instruction; returns the first `execute` actions of
+    it."""
 
     def __init__(self, ckpt: checkpoint.Checkpoint):
         self.ckpt = ckpt
-        self.uses = frozenset({"state", "instruction", "images"})
+        self.uses = frozenset({"state", "instruction",
+                               "objects" if ckpt.arch.reads_objects else "images"})
         self._tokens: dict[str, np.ndarray] = {}
 
     def reset(self) -> None:
@@ -50,7 +52,10 @@ class BaselinePolicy:
         text = observation.get("instruction", "")
         if text not in self._tokens:
             self._tokens[text] = encode(arch.kind, text, ckpt.vocab)[None]
-        chunk = forward(ckpt.params, arch, images, state, self._tokens[text])[0]
+        objects = (normalised_objects(observation["objects"], norm)[None]
+                   if arch.reads_objects else None)
+        chunk = forward(ckpt.params, arch, images, state, self._tokens[text],
+                        objects=objects)[0]
         return (chunk * norm["action_std"] + norm["action_mean"])[: ckpt.execute]
 
 

@@ -2,7 +2,8 @@
 
 `text` reads the instruction's words; `form` reads its canonical logical form as the parser
 prints it (`pick(left, cylinder[red])`), brackets and commas included, so that paraphrases of one
-task read alike; `blind` reads nothing. Token 0 pads, token 1 stands for a word the vocabulary
+task read alike; `blind` reads nothing. The objects kinds read as their language does
+(`objects-text` as `text`, `objects-form` as `form`). Token 0 pads, token 1 stands for a word the vocabulary
 lacks (or an instruction the parser rejects, for `form`).
 """
 
@@ -24,6 +25,7 @@ _FORM = re.compile(r"[a-z0-9]+|[^\sa-z0-9]")
 
 def words(kind: str, instruction: str) -> list[str]:
     """The tokens `kind` reads of an instruction."""
+    kind = kind.removeprefix("objects-")
     if kind == "blind":
         return []
     if kind == "text":

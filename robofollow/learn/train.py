@@ -2,7 +2,8 @@
 CPU (the `robofollow[train]` extra).
 
 Every sample is one frame: the chosen cameras (shrunk, shifted by up to `shift` pixels as
-augmentation), the joint state and the episode's instruction, with the next CHUNK actions of the
+augmentation) or, for the objects kinds, the objects observation (standardised per field), the
+joint state and the episode's instruction, with the next CHUNK actions of the
 demonstration as the target (the last action repeats past the episode's end: the arms stay
 home). Loss: L1 on normalised actions. Adam with a linear warm-up and a cosine decay.
 
@@ -26,7 +27,7 @@ from tqdm import tqdm
 
 from robofollow.learn import checkpoint
 from robofollow.learn.demos import Demonstrations, read_demonstrations
-from robofollow.learn.model import Architecture, forward, init
+from robofollow.learn.model import Architecture, forward, init, normalised_objects
 from robofollow.learn.options import TrainingError, TrainOptions
 from robofollow.learn.tokens import encode, vocabulary
 
@@ -74,7 +75,8 @@ def prepare(options: TrainOptions, progress: bool = True, cache: Path | None = N
     options.check()
     root = Path(options.dataset)
     with tqdm(desc="decoding", unit="video", disable=not progress) as bar:
-        demos = read_demonstrations(root, options.cameras, options.factor, bar.update, cache)
+        demos = read_demonstrations(root, options.image_cameras, options.factor, bar.update,
+                                    cache, objects=options.reads_objects)
     return arrange(demos, options)
 
 
@@ -98,6 +100,10 @@ def arrange(demos: Demonstrations, options: TrainOptions) -> Prepared:
     normalization = {"state_mean": states.mean(0), "state_std": np.maximum(states.std(0), 1e-2),
                      "action_mean": actions.mean(0),
                      "action_std": np.maximum(actions.std(0), 1e-2)}
+    if demos.objects is not None:  # each field over the bodies present in the training frames
+        rows = demos.objects[train_frames].reshape(-1, demos.objects.shape[-1])
+        rows = rows[rows[:, 0] > 0]
+        normalization.update(objects_mean=rows.mean(0), objects_std=np.maximum(rows.std(0), 1e-2))
     return Prepared(demos, train_frames, val_frames, frame_episode, tokens, vocab,
                     {k: v.astype(np.float32) for k, v in normalization.items()}, len(train))
 
@@ -170,10 +176,12 @@ def assemble(prepared: Prepared, options: TrainOptions, frames: np.ndarray,
     ends = demos.starts[episodes] + demos.lengths[episodes] - 1
     future = np.minimum(frames[:, None] + np.arange(options.chunk), ends[:, None])
     images = {}
-    for camera in options.cameras:
+    for camera in options.image_cameras:
         stack = np.asarray(demos.images[camera][frames])
         images[camera] = _shifted(stack, options.shift, rng) if rng is not None else stack
-    return {"images": images,
+    objects = (normalised_objects(demos.objects[frames], norm) if demos.objects is not None
+               else np.zeros((len(frames), 0, 0), np.float32))
+    return {"images": images, "objects": objects,
             "state": (demos.states[frames] - norm["state_mean"]) / norm["state_std"],
             "tokens": prepared.tokens[episodes],
             "target": (demos.actions[future] - norm["action_mean"]) / norm["action_std"]}
@@ -213,7 +221,7 @@ def compiled_steps(arch: Architecture, options: TrainOptions, total_steps: int):
 
     def loss(params, batch):
         predicted = forward(params, arch, batch["images"], batch["state"], batch["tokens"],
-                            xp=jnp, conv=_jax_conv)
+                            xp=jnp, conv=_jax_conv, objects=batch["objects"])
         return jnp.abs(predicted - batch["target"]).mean()
 
     def rate(step):
@@ -242,8 +250,9 @@ def train(options: TrainOptions, out: Path, resume: bool = False, progress: bool
     resumed run); returns the training record of the last checkpoint."""
     _jax()  # before the long decoding: say at once when the training stack is missing
     prepared = prepare(options, progress, cache)
-    arch = Architecture(options.kind, tuple(options.cameras),
-                        prepared.demos.images[options.cameras[0]].shape[1:3],
+    cameras = options.image_cameras
+    arch = Architecture(options.kind, tuple(cameras),
+                        prepared.demos.images[cameras[0]].shape[1:3] if cameras else (0, 0),
                         len(prepared.vocab), chunk=options.chunk)
     params, moments, start, spent = _initial_state(arch, options, out, resume)
     step_fn, loss_fn = compiled_steps(arch, options, options.steps)
