@@ -17,6 +17,8 @@ def add_train(commands) -> None:
                     "v3.0 dataset written by `robofollow generate`: a small CNN over the "
                     "cameras, the joint state and the instruction (text: its words; form: its "
                     "logical form; blind: nothing) predict chunks of joint targets (L1 loss). "
+                    "objects-text and objects-form read the objects observation (every body's "
+                    "kind, size, colour and pose: perception removed) instead of the cameras. "
                     "Checkpoints go to OUT every --checkpoint-every steps and at the end; an "
                     "interrupted run continues with --resume. CKPT is then a policy: "
                     "`robofollow eval --policy CKPT`.",
@@ -27,7 +29,10 @@ def add_train(commands) -> None:
                "--scenes scene2", formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("dataset", metavar="DATASET", help="dataset folder")
     p.add_argument("--policy", choices=KINDS,
-                   help=f"what the network reads of the instruction (default: {TrainOptions.kind})")
+                   help="what the network reads: the cameras with the instruction's words "
+                        "(text), its logical form (form) or nothing (blind), or the objects "
+                        "observation with the words or the form (objects-text, objects-form) "
+                        f"(default: {TrainOptions.kind})")
     p.add_argument("--out", required=True, metavar="CKPT", help="checkpoint folder (new, "
                                                                "or the one to --resume)")
     p.add_argument("--steps", type=positive, help=f"training steps (default: {TrainOptions.steps})")
