@@ -17,6 +17,7 @@ import pytest
 from robofollow.cli import main
 from robofollow.eval.instructions import given_instruction
 from robofollow.eval.loading import PolicyLoadError, load_policy
+from robofollow.eval.run_folder import SCORES
 from robofollow.eval.runner import (
     START_TOLERANCE_M,
     EvalOptions,
@@ -26,7 +27,7 @@ from robofollow.eval.runner import (
     select_episodes,
     start_hash,
 )
-from robofollow.eval.scores import SCORES, read_scores, write_scores
+from robofollow.eval.scores import read_scores, write_scores
 from robofollow.eval.tables import table_text
 from robofollow.resources import builtin_specs
 from tests.sim_helpers import benchmark, cached_benchmark, episode

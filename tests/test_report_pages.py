@@ -8,6 +8,7 @@ import csv
 import io
 import json
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -16,9 +17,9 @@ from robofollow.cli import main
 from robofollow.eval.outcomes import STILL, UNRECORDED, UNTOUCHED, UNTRAINED, closest
 from robofollow.eval.report import ReportError, compare_reports, write_report
 from robofollow.eval.report_data import report_data
-from robofollow.eval.run_folder import RESULTS, RUN_FILE, prepare
+from robofollow.eval.run_folder import RESULTS, RUN_FILE, SCORES, prepare
 from robofollow.eval.runner import summary
-from robofollow.eval.scores import SCORES, write_scores
+from robofollow.eval.scores import write_scores
 from tests.report_helpers import OPTIONS, fake_record
 
 SHIPPED = Path(__file__).resolve().parent.parent / "docs" / "results" / "baselines"
@@ -158,9 +159,15 @@ def test_comparing_runs_over_different_episodes_warns_and_keeps_the_common_ones(
     assert [set(t["cells"]["scene2"]) for t in found.tables] == [{"L0"}, {"L0"}]
 
 
+def test_a_run_without_episodes_gets_a_report_without_figures(tmp_path):
+    run = _folder(tmp_path / "run", [])
+    markdown, html = write_report(run)
+    assert "0 episodes" in markdown.read_text() and not (run / "figures").exists()
+
+
 def test_table_1_exports_with_its_intervals(tmp_path):
     records = _records("L0", 6, 1.0, 0.25) + _records("L1", 6, 0.0, 0.25)
-    run = _folder(tmp_path / "run", records)
+    run = _folder(tmp_path / "run", records, replace(OPTIONS, policy="runs/my_ckpt&v2"))
     assert main(["report", str(run), "--export", "csv", "--export", "latex"]) == 0
     rows = list(csv.DictReader(io.StringIO((run / "table1.csv").read_text())))
     assert [(r["scene"], r["level"], r["IS"], r["tasks"]) for r in rows] == [
@@ -169,6 +176,7 @@ def test_table_1_exports_with_its_intervals(tmp_path):
     assert rows[0]["chance_IS"] == "25.0"
     latex = (run / "table1.tex").read_text()
     assert r"\multicolumn{3}{c}{L0}" in latex and r"\makecell{100.0\\ \tiny[" in latex
+    assert r"runs/my\_ckpt\&v2" in latex and "95\\% intervals" in latex  # escaped
     assert latex.count(r"\\") >= 4 and r"\end{tabular}" in latex
 
 
@@ -193,6 +201,12 @@ def test_a_run_folder_without_a_finished_episode_is_as_good_as_empty(tmp_path):
     (out / RESULTS).write_text(json.dumps(fake_record("a", "L0", 1, 1, True, None)) + "\n")
     with pytest.raises(Exception, match="already holds a run"):
         prepare(out, OPTIONS.to_json(), resume=False)
+    # a shipped run keeps its summary and scores, not its records: it holds a run
+    shipped = _folder(tmp_path / "shipped", _records("L0", 2, 1.0, 0.25))
+    (shipped / RESULTS).unlink()
+    for resume in (False, True):
+        with pytest.raises(Exception, match="already holds a run|other options"):
+            prepare(shipped, dict(OPTIONS.to_json(), policy="noop"), resume=resume)
 
 
 def test_eval_videos_of_l3_episodes_are_captioned_and_shown_beside_their_cell(tmp_path):

@@ -117,7 +117,8 @@ def cmd_eval(args) -> int:
     from robofollow.eval.runner import EvalOptions, evaluate, failures_text, shard_of
     from robofollow.eval.tables import table_text
 
-    # everything a typo can spoil is checked before the (slow) compile and before any file
+    # what a typo can spoil is checked before the (slow) compile and before any file is
+    # written (task ids need the compiled episodes: after the compile, before any file)
     check_policy(args.policy)
     if args.policy_timeout is not None and is_server(args.policy):
         raise RoboFollowError("--policy-timeout limits in-process policies; a server takes "
@@ -305,7 +306,7 @@ def _export(run: Path, kind: str) -> Path:
     path = run / EXPORTS[kind]
     path.write_text(table1_csv(found) if kind == "csv" else table1_latex(
         found, f"RoboFollow Table 1: {options.policy}, {found['episodes']} episodes; "
-               "Intent, Execution and Completion (0--100) with 95\\% intervals over tasks."),
+               "Intent, Execution and Completion (0-100) with 95% intervals over tasks."),
         encoding="utf-8")
     return path
 

@@ -28,13 +28,13 @@ from robofollow.data.stats import BINS, QUANTILE_KEYS, array_stats
 from robofollow.files import json_lines
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
-from robofollow.sim.objects import SHAPE as OBJECTS_SHAPE
+from robofollow.sim.objects import FLAT as OBJECTS_WIDTH
 from robofollow.sim.video import probe
 
 WIDTH = len(robot.JOINT_NAMES)
 VECTOR_FEATURES = {"observation.state": WIDTH, "action": WIDTH}  # every dataset has them
 # where a dataset declares it: the objects observation, flattened
-OPTIONAL_VECTORS = {"observation.environment_state": int(np.prod(OBJECTS_SHAPE))}
+OPTIONAL_VECTORS = {"observation.environment_state": OBJECTS_WIDTH}
 SCALAR_FEATURES = {"timestamp": "float32", "frame_index": "int64", "episode_index": "int64",
                    "index": "int64", "task_index": "int64"}
 STATS_TOLERANCE = 1e-4  # absolute, on recomputed state/action statistics
@@ -500,8 +500,7 @@ def _check_hdf5(root: Path, info: dict, report: Report) -> None:
         try:
             with h5py.File(root / record["file"], "r") as h5:
                 widths = {"action": WIDTH, "observations/qpos": WIDTH,
-                          **({"observations/environment_state": OPTIONAL_VECTORS[
-                              "observation.environment_state"]}
+                          **({"observations/environment_state": OBJECTS_WIDTH}
                              if "observations/environment_state" in h5 else {})}
                 for name, size in widths.items():
                     data = h5[name]

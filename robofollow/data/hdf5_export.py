@@ -12,12 +12,11 @@ from robofollow.data.units import ROBOT_TYPE
 from robofollow.files import link_or_copy, write_json, write_jsonl
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
-from robofollow.sim.objects import FIELDS, SHAPE
+from robofollow.sim.objects import FIELDS, FLAT
 from robofollow.sim.simulation import CONTROL_HZ
 
 VERSION = "robofollow-hdf5-v1"
 EPISODE_PATH = "data/episode_{episode_index:06d}.hdf5"
-OBJECTS = SHAPE[0] * SHAPE[1]  # values of the flattened objects observation
 META_FIELDS = ("label", "scene", "layout", "seed", "spec_digest", "length", "instructions")
 
 
@@ -41,7 +40,7 @@ def write(out: Path, demos: list[tuple[dict, Path]], width: int, height: int,
         "datasets": {"action": "float32 (N, 14): the joint target sent after observation t",
                      "observations/qpos": "float32 (N, 14): the joint state at t",
                      "observations/environment_state": (
-                         f"float32 (N, {OBJECTS}): the objects observation at t, rows of "
+                         f"float32 (N, {FLAT}): the objects observation at t, rows of "
                          f"{', '.join(FIELDS)}, flattened"),
                      "observations/images/<camera>": "uint8 (N, H, W, 3) RGB",
                      "instructions": "JSON list of the episode's instructions"}})

@@ -14,7 +14,7 @@ from robofollow.data.stats import array_stats, as_image_stats
 from robofollow.data.units import ROBOT_TYPE
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
-from robofollow.sim.objects import FIELDS, MAX_OBJECTS
+from robofollow.sim.objects import FIELDS, FLAT, MAX_OBJECTS
 from robofollow.sim.simulation import CONTROL_HZ
 from robofollow.sim.video import CODEC_NAME, PIXEL_FORMAT
 
@@ -67,7 +67,7 @@ def features(width: int, height: int) -> dict:
     for key in ("observation.state", "action"):
         result[key] = {"dtype": "float32", "shape": [len(robot.JOINT_NAMES)],
                        "names": list(robot.JOINT_NAMES)}
-    result[ENVIRONMENT_STATE] = {"dtype": "float32", "shape": [len(OBJECT_NAMES)],
+    result[ENVIRONMENT_STATE] = {"dtype": "float32", "shape": [FLAT],
                                  "names": list(OBJECT_NAMES)}
     result["timestamp"] = {"dtype": "float32", "shape": [1], "names": None}
     for key in INDEX_COLUMNS:
@@ -98,7 +98,7 @@ def frame_table(episode: Episode, arrays: dict[str, np.ndarray], start: int) -> 
         "observation.state": pa.FixedSizeListArray.from_arrays(
             pa.array(arrays["state"].reshape(-1), pa.float32()), width),
         ENVIRONMENT_STATE: pa.FixedSizeListArray.from_arrays(
-            pa.array(arrays["environment_state"].reshape(-1), pa.float32()), len(OBJECT_NAMES)),
+            pa.array(arrays["environment_state"].reshape(-1), pa.float32()), FLAT),
         "action": pa.FixedSizeListArray.from_arrays(
             pa.array(arrays["action"].reshape(-1), pa.float32()), width),
         "timestamp": pa.array((frames / FPS).astype(np.float32)),

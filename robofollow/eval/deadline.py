@@ -17,7 +17,6 @@ from contextlib import contextmanager
 
 from robofollow.errors import RoboFollowError
 
-
 DEFAULT_POLICY_TIMEOUT = 60.0  # seconds per reset() or act() call of an in-process policy
 
 

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from robofollow.oracle.metrics import shown_interval
+
 FIGURES = "figures"  # the folder beside the report
 INSTALL = "pip install 'robofollow[figures]'"
 COLOURS = ("#4c72b0", "#dd8452", "#55a868", "#c44e52", "#8172b3", "#937860", "#da8bc3",
@@ -50,7 +52,10 @@ def _errors(values: list[float], intervals: list[list[float] | None]) -> np.ndar
 
 
 def run_figures(data: dict, folder: Path) -> list[dict]:
-    """Every figure of a run's report (report_data.report_data), written under folder."""
+    """Every figure of a run's report (report_data.report_data), written under folder; none
+    for a run without episodes."""
+    if not data["table"]:
+        return []
     made = [_levels(data, folder)]
     if data["drops"]:
         made.append(_drops(data, folder))
@@ -76,8 +81,7 @@ def _levels(data: dict, folder: Path) -> dict:
             shown = [cells[scene][level] for level in levels if level in cells[scene]]
             values = [c[metric] for c in shown]
             ax.bar(x, values, width * 0.9, color=COLOURS[s % len(COLOURS)], label=scene,
-                   yerr=_errors(values, [c["ci95_tasks"][metric] or c["ci95"][metric]
-                                         for c in shown]),
+                   yerr=_errors(values, [shown_interval(c, metric) for c in shown]),
                    error_kw={"elinewidth": 0.8, "capsize": 1.5})
             chance = f"chance_{metric}"
             if all(chance in c for c in shown):
@@ -179,8 +183,7 @@ def comparison_figure(runs: list[str], summaries: list[dict], folder: Path) -> d
         values = [c["IS"] for _, c in present]
         ax.bar([i - 0.4 + width * (r + 0.5) for i, _ in present], values, width * 0.9,
                color=COLOURS[r % len(COLOURS)], label=run,
-               yerr=_errors(values, [c["ci95_tasks"]["IS"] or c["ci95"]["IS"]
-                                     for _, c in present]),
+               yerr=_errors(values, [shown_interval(c, "IS") for _, c in present]),
                error_kw={"elinewidth": 0.8, "capsize": 1.5})
     chance = {key: found["cells"][key[0]][key[1]].get("chance_IS") for found in summaries
               for key in keys if key[1] in found["cells"].get(key[0], {})}

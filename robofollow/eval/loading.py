@@ -58,12 +58,9 @@ def check_policy(spec: str) -> None:
     if kind in SERVER_KINDS:
         _server_settings(spec)
     elif kind == "baseline":
-        from robofollow.learn.policy import shipped_names  # (the learn package is heavy)
+        from robofollow.learn.policy import shipped_folder  # (the learn package is heavy)
 
-        name, shipped = spec.partition(":")[2], shipped_names()
-        if name not in shipped:
-            hint = did_you_mean(name, shipped) or f"shipped: {', '.join(shipped) or 'none'}"
-            raise PolicyLoadError(f"--policy {spec!r}: no shipped baseline {name!r}; {hint}")
+        shipped_folder(spec)
     elif kind == "factory":
         module_name, _ = _factory_parts(spec)
         try:

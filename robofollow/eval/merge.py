@@ -13,10 +13,10 @@ from robofollow.compiled_cache import Episodes
 from robofollow.errors import RoboFollowError
 from robofollow.eval.compare import named
 from robofollow.eval.report import write_report
-from robofollow.eval.run_folder import RESULTS, SUMMARY, check_out, prepare, run_lock
+from robofollow.eval.run_folder import RESULTS, SCORES, SUMMARY, check_out, prepare, run_lock
 from robofollow.eval.runner import EvalOptions, select_episodes, shard_of, summary, with_motion
 from robofollow.eval.saved_run import load_run
-from robofollow.eval.scores import SCORES, write_scores
+from robofollow.eval.scores import write_scores
 from robofollow.files import json_line, write_json_atomic
 
 

@@ -7,13 +7,15 @@ Read from full records (RUN/episodes.jsonl) and from the compact records of a sc
 
 from __future__ import annotations
 
+from robofollow.oracle.instead import NOTHING_MOVED, TOUCHED_NOTHING
+
 AS_INSTRUCTED, TRAINING, OTHER_BRANCH = "as instructed", "another training task", "other branch"
 STILL, UNTOUCHED, UNTRAINED = ("nothing moved", "moved but touched nothing",
                                "handled objects in no trained way")
 UNRECORDED = "touched nothing, arm motion not recorded"  # records before arms_moved
 UNRECOGNISED = (STILL, UNTOUCHED, UNTRAINED, UNRECORDED)  # no known behaviour is close
 DID = (AS_INSTRUCTED, TRAINING, OTHER_BRANCH, *UNRECOGNISED)
-NO_CONTACT = ("nothing moved", "the arms moved but touched nothing")  # the oracle's words
+NO_CONTACT = (NOTHING_MOVED, TOUCHED_NOTHING)  # the oracle's words where nothing was touched
 
 
 def closest(record: dict) -> str:

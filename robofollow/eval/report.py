@@ -26,7 +26,7 @@ from robofollow.eval.figures import FiguresUnavailable, comparison_figure, run_f
 from robofollow.eval.pages import PAGES
 from robofollow.eval.report_data import report_data
 from robofollow.eval.runner import EvalOptions, with_motion
-from robofollow.eval.saved_run import load_run, summarised_episodes
+from robofollow.eval.saved_run import load_options, load_records, load_run, summarised_episodes
 from robofollow.oracle.metrics import METRICS, MOTIONS, table
 
 PAGES_OF_A_RUN = ("report.md", "report.html", "tasks.html")
@@ -78,7 +78,7 @@ def compare_reports(runs: list[Path], motions: list[dict[str, str | None]] | Non
     """The runs' Table 1 on the episodes every run holds; under each L1 and L3 cell, its
     moved and its as-trained tasks (`motions`, per run, fills in the records written before
     they carried their task's motion); and each later run against the first, paired."""
-    loaded = [load_run(run) for run in runs]
+    loaded = [(load_options(run), load_records(run)) for run in runs]  # (scores suffice)
     motions = motions or [{} for _ in runs]
     held = [{r["episode"] for r in results} for _, results in loaded]
     common = set.intersection(*held)

@@ -20,7 +20,7 @@ from robofollow.eval.outcomes import DID, UNRECOGNISED, closest, first_failure, 
 from robofollow.eval.pages import shade
 from robofollow.eval.runner import EvalOptions, summary
 from robofollow.eval.tables import perception_removed
-from robofollow.oracle.metrics import METRICS, MOTIONS
+from robofollow.oracle.metrics import METRICS, MOTIONS, scores, shown_interval
 
 VIDEO_LINK = re.compile(r"videos/[A-Za-z0-9_.#@-]+\.mp4")  # what the runner writes
 TOP = 15  # confusions and failure reasons listed
@@ -36,8 +36,7 @@ def below_chance(cell: dict) -> bool:
     (the Wilson interval over episodes for a one-task cell) is below the chance Intent."""
     if "chance_IS" not in cell:
         return False
-    bounds = cell["ci95_tasks"]["IS"] or cell["ci95"]["IS"]
-    return bounds[1] < cell["chance_IS"]
+    return shown_interval(cell, "IS")[1] < cell["chance_IS"]
 
 
 def level_averages(cells: dict, levels: list[str]) -> dict:
@@ -80,16 +79,6 @@ def _group(results: list[dict], *keys) -> dict:
     return grouped
 
 
-def _scores(records: list[dict]) -> dict:
-    """IS, ES (episode means) and CR (mean over tasks of their completion) on 0-100."""
-    by_task = _group(records, "task")
-    return {"IS": 100 * float(np.mean([r["intent_score"] for r in records])),
-            "ES": 100 * float(np.mean([r["execution_score"] for r in records])),
-            "CR": 100 * float(np.mean([np.mean([r["complete"] for r in group])
-                                       for group in by_task.values()])),
-            "tasks": len(by_task), "episodes": len(records)}
-
-
 def breakdown(results: list[dict], levels: tuple[str, ...], key) -> list[dict]:
     """Per scene, level (of `levels`) and key value (a layout, a training task): the scores,
     with the cell's chance Intent where the records carry it."""
@@ -97,7 +86,7 @@ def breakdown(results: list[dict], levels: tuple[str, ...], key) -> list[dict]:
     for (scene, level, value), records in sorted(
             _group([r for r in results if r["level"] in levels], "scene", "level", key).items()):
         chance = [r["chance"]["IS"] for r in records if r.get("chance")]
-        rows.append({"scene": scene, "level": level, "key": value, **_scores(records),
+        rows.append({"scene": scene, "level": level, "key": value, **scores(records),
                      "chance_IS": 100 * float(np.mean(chance)) if chance else None})
     return rows
 
@@ -150,7 +139,7 @@ def findings(data: dict) -> list[str]:
 def _table(cells: dict, levels: list[str]) -> list[dict]:
     """Table 1's cells in order, each with its interval over tasks and its below-chance flag."""
     return [{"scene": scene, "level": level, **row[level],
-             "interval": row[level]["ci95_tasks"]["IS"] or row[level]["ci95"]["IS"],
+             "interval": shown_interval(row[level], "IS"),
              "below_chance": below_chance(row[level]), "shade": shade(row[level]["IS"])}
             for scene, row in cells.items() for level in levels if level in row]
 
@@ -266,7 +255,7 @@ def report_data(name: str, options: EvalOptions, results: list[dict],
         "motion_unknown": sum(row["unknown"] for row in by_motion),
         "layouts": breakdown(results, LAYOUT_LEVELS, "layout"),
         "training": breakdown(results, DERIVED_LEVELS, lambda r: origin(r["task"])),
-        "tasks": [{"task": task, **_scores(records)}
+        "tasks": [{"task": task, **scores(records)}
                   for task, records in sorted(_group(results, "task").items())],
         "names": names, "instructions": instructions,
         "did": _did(results, shown), "did_kinds": shown,

@@ -17,6 +17,7 @@ from robofollow.errors import RoboFollowError
 from robofollow.files import changed_options, json_line, json_lines, write_json_atomic
 
 RUN_FILE, RESULTS, SUMMARY, LOCK = "run.json", "episodes.jsonl", "summary.json", ".lock"
+SCORES = "scores.csv.gz"  # the compact records a finished run keeps (scores.py)
 DROPPED = RESULTS + ".dropped"  # corrupt lines that --drop-corrupt moved out of RESULTS
 _RECORD_FIELDS = {"episode": str, "scene": str, "level": str, "task": str,
                   "intent_score": (int, float), "execution_score": (int, float),
@@ -220,9 +221,12 @@ def write_json(path: Path, data) -> None:
 
 def _unstarted(out: Path) -> bool:
     """A run folder whose run never finished an episode (a run stopped before its first, or a
-    mistyped command's): as good as empty."""
+    mistyped command's): as good as empty. A folder that keeps a finished run's summary or
+    scores (a shipped run) is not."""
     results = out / RESULTS
-    return (out / RUN_FILE).is_file() and (not results.is_file() or results.stat().st_size == 0)
+    return ((out / RUN_FILE).is_file()
+            and (not results.is_file() or results.stat().st_size == 0)
+            and not (out / SUMMARY).exists() and not (out / SCORES).exists())
 
 
 def check_prepare(out: Path, options: dict, resume: bool) -> None:

@@ -47,6 +47,7 @@ from robofollow.eval.policy_kind import policy_kind
 from robofollow.eval.run_folder import (
     RESULTS,
     RESUMABLE,
+    SCORES,
     SUMMARY,
     EvalOutputError,
     EvalRunError,
@@ -58,7 +59,7 @@ from robofollow.eval.run_folder import (
     run_lock,
     write_json,
 )
-from robofollow.eval.scores import SCORES, write_scores
+from robofollow.eval.scores import write_scores
 from robofollow.oracle.metrics import table
 from robofollow.sim.cameras import side_by_side
 from robofollow.sim.simulation import CONTROL_HZ

@@ -8,9 +8,9 @@ import json
 from pathlib import Path
 
 from robofollow.errors import RoboFollowError
-from robofollow.eval.run_folder import RESULTS, RUN_FILE, SUMMARY, read_results
+from robofollow.eval.run_folder import RESULTS, RUN_FILE, SCORES, SUMMARY, read_results
 from robofollow.eval.runner import EvalOptions
-from robofollow.eval.scores import SCORES, compact_records, holds_reported, read_scores
+from robofollow.eval.scores import compact_records, holds_reported, read_scores
 
 
 class RunReadError(RoboFollowError):

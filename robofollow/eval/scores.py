@@ -6,8 +6,8 @@ A row holds the episode id, its hash (what pairs two runs' episodes), its scene'
 the task's motion, Intent, Execution, completion, the hash of its realised start on a grid
 (runner.start_hash); then what the report reads: the layout, seed, chance and followed
 Intent, what the policy did and its first failed stage (outcomes.py), clipped actions, steps,
-the policy error, the video, the task's instruction and the observation parts the policy
-read. Files written before a column was
+the policy error, the video, the instruction given (and the task's own, where another was
+given) and the observation parts the policy read. Files written before a column was
 added lack it (COLUMNS after the first seven). Byte-identical for the same records."""
 
 from __future__ import annotations
@@ -21,11 +21,10 @@ from robofollow.errors import RoboFollowError
 from robofollow.eval.outcomes import closest, first_failure
 from robofollow.files import write_bytes_atomic
 
-SCORES = "scores.csv.gz"
 COLUMNS = ("episode", "hash", "split", "motion", "intent", "execution", "complete", "start",
            "layout", "seed", "chance_is", "chance_cr", "followed", "did", "failed", "reason",
-           "clipped", "steps", "error", "video", "instruction", "observed")
-REPORTED = COLUMNS[8:-1]  # what a report rebuilt from the file needs beyond the scores
+           "clipped", "steps", "error", "video", "instruction", "task_instruction", "observed")
+REPORTED = COLUMNS[8:-2]  # what a report rebuilt from the file needs beyond the scores
 
 
 def score_rows(results: list[dict]) -> list[dict]:
@@ -48,7 +47,8 @@ def _row(r: dict) -> dict:
             "failed": failed[0] if failed else "", "reason": failed[1] if failed else "",
             "clipped": r.get("clipped", 0), "steps": r.get("steps", ""),
             "error": r.get("error") or "", "video": r.get("video") or "",
-            "instruction": r.get("task_instruction") or r.get("instruction") or "",
+            "instruction": r.get("instruction") or "",
+            "task_instruction": r.get("task_instruction") or "",
             "observed": ",".join(r.get("observed", ()))}
 
 
@@ -80,8 +80,11 @@ def read_scores(path: Path) -> list[dict]:
 
 def holds_reported(path: Path) -> bool:
     """Whether a scores file keeps what a report needs (files written before it did not)."""
-    with gzip.open(path, "rt") as text:
-        return set(REPORTED) <= set(text.readline().strip().split(","))
+    try:
+        with gzip.open(path, "rt") as text:
+            return set(REPORTED) <= set(text.readline().strip().split(","))
+    except (OSError, EOFError, UnicodeDecodeError) as error:
+        raise RoboFollowError(f"{path}: not a scores file ({error})") from None
 
 
 def compact_records(rows: list[dict]) -> list[dict]:
@@ -107,7 +110,9 @@ def _record(row: dict) -> dict:
         followed_intent=float(row["followed"]) if row["followed"] else None, did=row["did"],
         first_failure=(row["failed"], row["reason"]) if row["failed"] else None,
         clipped=int(row["clipped"] or 0), steps=int(row["steps"]) if row["steps"] else None,
-        error=row["error"] or None, task_instruction=row["instruction"] or None)
+        error=row["error"] or None, instruction=row["instruction"])
+    if row.get("task_instruction"):
+        record["task_instruction"] = row["task_instruction"]
     if row["video"]:
         record["video"] = row["video"]
     if row.get("observed"):

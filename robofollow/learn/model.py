@@ -21,12 +21,12 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
+from robofollow.learn.options import reads_objects
 from robofollow.learn.tokens import MAX_TOKENS
 from robofollow.sim import CHUNK
 from robofollow.sim.objects import FIELDS
 
 ACTION_WIDTH = 14
-OBJECTS_PREFIX = "objects-"  # a kind that reads the objects observation, then its language
 OBJECT_FIELDS = len(FIELDS)
 
 
@@ -50,7 +50,7 @@ class Architecture:
     @property
     def reads_objects(self) -> bool:
         """The objects observation instead of camera images."""
-        return self.kind.startswith(OBJECTS_PREFIX)
+        return reads_objects(self.kind)
 
     def to_dict(self) -> dict:
         return asdict(self)

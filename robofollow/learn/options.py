@@ -11,6 +11,12 @@ from robofollow.sim import CHUNK
 # what the network reads: camera images, or the objects observation (perception removed); and
 # of the instruction its words, its logical form (tokens.py) or nothing
 KINDS = ("text", "blind", "form", "objects-text", "objects-form")
+OBJECTS_PREFIX = "objects-"  # a kind that reads the objects observation, then its language
+
+
+def reads_objects(kind: str) -> bool:
+    """Whether a kind reads the objects observation instead of camera images."""
+    return kind.startswith(OBJECTS_PREFIX)
 
 
 class TrainingError(RoboFollowError):
@@ -39,14 +45,9 @@ class TrainOptions:
         return asdict(self)
 
     @property
-    def reads_objects(self) -> bool:
-        """The objects observation instead of camera images (perception removed)."""
-        return self.kind.startswith("objects-")
-
-    @property
     def image_cameras(self) -> tuple[str, ...]:
         """The cameras the network reads: none for the objects kinds."""
-        return () if self.reads_objects else self.cameras
+        return () if reads_objects(self.kind) else self.cameras
 
     def check(self) -> None:
         """TrainingError naming the first option out of its range."""

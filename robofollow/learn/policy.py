@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from robofollow.errors import did_you_mean
 from robofollow.learn import checkpoint
 from robofollow.learn.demos import downsample
 from robofollow.learn.model import forward, normalised_objects
@@ -64,13 +65,18 @@ def shipped_names() -> list[str]:
         if SHIPPED.is_dir() else []
 
 
+def shipped_folder(spec: str) -> Path:
+    """The folder of a shipped baseline named `baseline:NAME`; else the error, with the
+    closest name."""
+    name, shipped = spec[len(checkpoint.PREFIX):], shipped_names()
+    if name not in shipped:
+        hint = did_you_mean(name, shipped) or f"shipped: {', '.join(shipped) or 'none'}"
+        raise checkpoint.CheckpointError(f"--policy {spec!r}: no shipped baseline {name!r}; "
+                                         f"{hint}")
+    return SHIPPED / name
+
+
 def load_baseline(spec: str) -> BaselinePolicy:
     """A policy from `baseline:NAME` or a checkpoint folder."""
-    if spec.startswith(checkpoint.PREFIX):
-        name = spec[len(checkpoint.PREFIX):]
-        if name not in shipped_names():
-            raise checkpoint.CheckpointError(
-                f"--policy {spec!r}: no shipped baseline {name!r}; shipped: "
-                f"{', '.join(shipped_names()) or 'none'}")
-        return BaselinePolicy(checkpoint.load(SHIPPED / name))
-    return BaselinePolicy(checkpoint.load(Path(spec)))
+    folder = shipped_folder(spec) if spec.startswith(checkpoint.PREFIX) else Path(spec)
+    return BaselinePolicy(checkpoint.load(folder))

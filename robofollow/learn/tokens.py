@@ -16,6 +16,7 @@ import numpy as np
 from robofollow.compiler.notation import notation
 from robofollow.compiler.parser import parse
 from robofollow.errors import InstructionError
+from robofollow.learn.options import OBJECTS_PREFIX
 
 PAD, UNKNOWN = 0, 1
 MAX_TOKENS = 32
@@ -25,7 +26,7 @@ _FORM = re.compile(r"[a-z0-9]+|[^\sa-z0-9]")
 
 def words(kind: str, instruction: str) -> list[str]:
     """The tokens `kind` reads of an instruction."""
-    kind = kind.removeprefix("objects-")
+    kind = kind.removeprefix(OBJECTS_PREFIX)
     if kind == "blind":
         return []
     if kind == "text":

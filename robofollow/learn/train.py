@@ -28,7 +28,7 @@ from tqdm import tqdm
 from robofollow.learn import checkpoint
 from robofollow.learn.demos import Demonstrations, read_demonstrations
 from robofollow.learn.model import Architecture, forward, init, normalised_objects
-from robofollow.learn.options import TrainingError, TrainOptions
+from robofollow.learn.options import TrainingError, TrainOptions, reads_objects
 from robofollow.learn.tokens import encode, vocabulary
 
 WARMUP = 200  # steps of linear learning-rate warm-up
@@ -76,7 +76,7 @@ def prepare(options: TrainOptions, progress: bool = True, cache: Path | None = N
     root = Path(options.dataset)
     with tqdm(desc="decoding", unit="video", disable=not progress) as bar:
         demos = read_demonstrations(root, options.image_cameras, options.factor, bar.update,
-                                    cache, objects=options.reads_objects)
+                                    cache, objects=reads_objects(options.kind))
     return arrange(demos, options)
 
 

@@ -12,6 +12,8 @@ from robofollow.oracle import predicates as P
 from robofollow.oracle.recording import Attempt, Recording
 from robofollow.trajectory import ARMS
 
+NOTHING_MOVED = "nothing moved"  # what the arms did, where they went for no object and none moved
+TOUCHED_NOTHING = "the arms moved but touched nothing"  # ... though a gripper left its start
 SIDES = {"left_of": "left of", "right_of": "right of", "behind": "behind",
          "in_front_of": "in front of"}
 HEADINGS = {"left_of": "to the left", "right_of": "to the right", "behind": "away",
@@ -29,7 +31,7 @@ def describe_actions(rec: Recording) -> str:
                 if body not in held and _moved(rec, body)]
     if clauses:
         return "; ".join(clauses)
-    return "the arms moved but touched nothing" if arms_moved(rec) else "nothing moved"
+    return TOUCHED_NOTHING if arms_moved(rec) else NOTHING_MOVED
 
 
 def arms_moved(rec: Recording) -> bool:

@@ -48,7 +48,7 @@ def table(results: Iterable[Mapping]) -> dict:
         grouped[result["scene"], result["level"]].append(result)
     cells: dict[str, dict[str, dict]] = {}
     for (scene, level), episodes in sorted(grouped.items()):
-        cells.setdefault(scene, {})[level] = {**_scores(episodes), **_references(episodes)}
+        cells.setdefault(scene, {})[level] = {**scores(episodes), **_references(episodes)}
         cell = cells[scene][level]
         cell["ci95"] = {m: wilson(cell[m] / 100, len(episodes)) for m in METRICS}
         cell["ci95_tasks"] = task_intervals(episodes)
@@ -62,7 +62,7 @@ def table(results: Iterable[Mapping]) -> dict:
     return {"cells": cells, **averages}
 
 
-def _scores(episodes: list[Mapping]) -> dict:
+def scores(episodes: list[Mapping]) -> dict:
     """IS, ES, CR (task macro average), CR_micro and the episode and task counts."""
     tasks: dict[str, list[bool]] = defaultdict(list)
     for e in episodes:
@@ -94,11 +94,17 @@ def task_intervals(episodes: list[Mapping]) -> dict[str, list[float] | None]:
     return found
 
 
+def shown_interval(cell: Mapping, metric: str) -> list[float]:
+    """A cell's interval as reports read it: over its tasks, else (a cell of one task) the
+    Wilson interval over its episodes."""
+    return cell["ci95_tasks"][metric] or cell["ci95"][metric]
+
+
 def by_motion(episodes: list[Mapping]) -> dict:
     """A cell's episodes split by their task's motion: {"moved": scores or None,
     "as-trained": scores or None, "unknown": the episodes whose record does not say}."""
     split = {kind: [e for e in episodes if e.get("motion") == kind] for kind in MOTIONS}
-    return {**{kind: _scores(subset) if subset else None for kind, subset in split.items()},
+    return {**{kind: scores(subset) if subset else None for kind, subset in split.items()},
             "unknown": len(episodes) - sum(len(subset) for subset in split.values())}
 
 

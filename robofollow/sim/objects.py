@@ -24,6 +24,7 @@ FIELDS = ("present", *(f"is_{kind}" for kind in KINDS), "size_x", "size_y", "siz
           "red", "green", "blue", "x", "y", "z", "yaw_sin", "yaw_cos")
 MAX_OBJECTS = 12  # rows: the largest layout holds 7 bodies
 SHAPE = (MAX_OBJECTS, len(FIELDS))
+FLAT = MAX_OBJECTS * len(FIELDS)  # values of the observation flattened row by row (datasets)
 
 
 def _looks(scene: Scene, bodies: list[str] | tuple[str, ...]) -> np.ndarray:
