@@ -20,7 +20,7 @@ from robofollow.eval.outcomes import DID, UNRECOGNISED, closest, first_failure, 
 from robofollow.eval.pages import shade
 from robofollow.eval.runner import EvalOptions, summary
 from robofollow.eval.tables import perception_removed
-from robofollow.oracle.metrics import METRICS, MOTIONS, scores, shown_interval
+from robofollow.oracle.metrics import METRICS, MOTIONS, references, scores, shown_interval
 
 VIDEO_LINK = re.compile(r"videos/[A-Za-z0-9_.#@-]+\.mp4")  # what the runner writes
 TOP = 15  # confusions and failure reasons listed
@@ -85,9 +85,8 @@ def breakdown(results: list[dict], levels: tuple[str, ...], key) -> list[dict]:
     rows = []
     for (scene, level, value), records in sorted(
             _group([r for r in results if r["level"] in levels], "scene", "level", key).items()):
-        chance = [r["chance"]["IS"] for r in records if r.get("chance")]
         rows.append({"scene": scene, "level": level, "key": value, **scores(records),
-                     "chance_IS": 100 * float(np.mean(chance)) if chance else None})
+                     "chance_IS": references(records).get("chance_IS")})
     return rows
 
 

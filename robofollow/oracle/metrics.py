@@ -48,7 +48,7 @@ def table(results: Iterable[Mapping]) -> dict:
         grouped[result["scene"], result["level"]].append(result)
     cells: dict[str, dict[str, dict]] = {}
     for (scene, level), episodes in sorted(grouped.items()):
-        cells.setdefault(scene, {})[level] = {**scores(episodes), **_references(episodes)}
+        cells.setdefault(scene, {})[level] = {**scores(episodes), **references(episodes)}
         cell = cells[scene][level]
         cell["ci95"] = {m: wilson(cell[m] / 100, len(episodes)) for m in METRICS}
         cell["ci95_tasks"] = task_intervals(episodes)
@@ -123,7 +123,8 @@ def _mean(cells: list[dict], key: str) -> float:
     return round(float(np.mean([c[key] for c in cells])), 2) if cells else 0.0
 
 
-def _references(episodes: list[Mapping]) -> dict:
+def references(episodes: list[Mapping]) -> dict:
+    """The episodes' chance_IS, chance_CR and followed_IS (0-100), where every one carries them."""
     found = {}
     if all("chance" in e for e in episodes):
         found["chance_IS"] = _percent(e["chance"]["IS"] for e in episodes)
