@@ -27,14 +27,26 @@ if [ ! -f "$DATA/manifest.json" ]; then
     timed generate robofollow generate specs --out "$DATA" --workers "$WORKERS" --quiet \
         $(started "$DATA")
 fi
-for kind in objects-form objects-text text form blind; do
-    ckpt="$RUNS/ckpt-$kind"
-    if ! python -c "import json,sys; d=json.load(open('$ckpt/policy.json'));
-sys.exit(d['training']['steps'] < $STEPS)" 2>/dev/null; then
-        timed "train-$kind" robofollow train "$DATA" --policy "$kind" --out "$ckpt" \
-            --steps "$STEPS" --quiet $(started "$ckpt/policy.json")
-    fi
-done
+# Trainings run in two lanes, each pinned to one core: on a 2-core CPU two one-core runs train
+# 1.5x faster together than one run on both cores (XLA's small convolutions scale poorly), and
+# XLA's older CPU runtime runs them ~20% faster still (3.5 against 2.8 steps/s on one core).
+export XLA_FLAGS=${XLA_FLAGS:---xla_cpu_use_thunk_runtime=false}
+trained() { python -c "import json,sys; d=json.load(open('$1/policy.json'));
+sys.exit(d['training']['steps'] < $STEPS)" 2>/dev/null; }
+lane() {  # core, kinds...: train each kind in turn on that core
+    local core=$1 kind ckpt
+    shift
+    for kind in "$@"; do
+        ckpt="$RUNS/ckpt-$kind"
+        trained "$ckpt" || timed "train-$kind" taskset -c "$core" robofollow train "$DATA" \
+            --policy "$kind" --out "$ckpt" --steps "$STEPS" --quiet \
+            $(started "$ckpt/policy.json")
+    done
+}
+lane 0 objects-form objects-text text & first=$!
+lane $(( 1 % WORKERS )) blind form & second=$!
+wait "$first"
+wait "$second"
 for kind in objects-form objects-text text form blind; do
     run="$RUNS/eval-$kind"
     controls=()
