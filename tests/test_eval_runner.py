@@ -70,7 +70,7 @@ def test_the_expert_run_records_every_episode_and_scores_in_full(expert_run):
     assert "task_instruction" not in record  # only where another instruction was given
     first = record["stages"][0]
     assert first["intent"] == first["execution"] == first["weight"] and set(record["hashes"]) == {
-        "episode", "split", "instruction", "initial_state", "start"}
+        "episode", "split", "instruction", "initial_state", "start", "trajectory"}
     assert record["start_tolerance_m"] == START_TOLERANCE_M
     assert summary["splits"] == {SCENE: [benchmark().split_digests[SCENE][:16]]}
     scores = read_scores(expert_run / SCORES)
@@ -78,6 +78,8 @@ def test_the_expert_run_records_every_episode_and_scores_in_full(expert_run):
     assert all(row["intent"] == row["execution"] == 1.0 and row["complete"] for row in scores)
     assert {row["hash"] for row in scores} == {r["hashes"]["episode"] for r in results}
     assert {row["start"] for row in scores} == {r["hashes"]["start"] for r in results}
+    trajectories = {row["trajectory"] for row in scores}
+    assert trajectories == {r["hashes"]["trajectory"] for r in results} and len(trajectories) == 16
     again = expert_run.parent / "again.csv.gz"
     write_scores(again, list(reversed(results)))  # the same bytes in any finishing order
     assert again.read_bytes() == (expert_run / SCORES).read_bytes()
@@ -109,6 +111,12 @@ def test_a_killed_run_resumes_with_every_episode_once_and_the_same_summary(exper
     assert sorted(r["episode"] for r in again) == sorted(
         r["episode"] for r in read_results(expert_run / "episodes.jsonl"))
     assert again[:len(kept)] == kept
+    first = read_results(expert_run / "episodes.jsonl")
+    assert _trajectories(again) == _trajectories(first)  # every episode reproduced exactly
+
+
+def _trajectories(records: list[dict]) -> dict[str, str]:
+    return {r["episode"]: r["hashes"]["trajectory"] for r in records}
     assert (out / "summary.json").read_text() == (expert_run / "summary.json").read_text()
     assert "| scene1 | 100.0 | 100.0 | 100.0 |" in (out / "report.md").read_text()
 

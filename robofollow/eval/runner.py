@@ -65,6 +65,7 @@ from robofollow.sim.cameras import side_by_side
 from robofollow.sim.simulation import CONTROL_HZ
 from robofollow.sim.stage import Stage
 from robofollow.sim.video import captioned, write_video
+from robofollow.trajectory import Trajectory
 from robofollow.workers import WorkerStartError, results
 
 
@@ -154,6 +155,13 @@ def start_hash(positions: np.ndarray, quaternions: np.ndarray) -> str:
     return _digest(grid.tobytes())
 
 
+def trajectory_hash(trajectory: Trajectory) -> str:
+    """The recorded episode bit for bit: joint states, actions, body positions and
+    orientations at every frame (a rerun reproduces it exactly on the same build)."""
+    arrays = (trajectory.state, trajectory.action, trajectory.positions, trajectory.quaternions)
+    return _digest(b"".join(np.ascontiguousarray(a, np.float64).tobytes() for a in arrays))
+
+
 def result_record(episode: Episode, instruction: str, run: EpisodeRun) -> dict:
     """An episode's line in RUN/episodes.jsonl. `instruction` is the one given; where it is
     not the task's own (the empty and shuffled controls), `task_instruction` holds that."""
@@ -175,7 +183,8 @@ def result_record(episode: Episode, instruction: str, run: EpisodeRun) -> dict:
         "hashes": {"episode": episode.hash, "split": episode.split,
                    "instruction": _digest(instruction.encode()),
                    "initial_state": _digest(start),
-                   "start": start_hash(trajectory.positions[0], trajectory.quaternions[0])},
+                   "start": start_hash(trajectory.positions[0], trajectory.quaternions[0]),
+                   "trajectory": trajectory_hash(trajectory)},
         "start_tolerance_m": START_TOLERANCE_M}
 
 

@@ -7,7 +7,8 @@ the task's motion, Intent, Execution, completion, the hash of its realised start
 (runner.start_hash); then what the report reads: the layout, seed, chance and followed
 Intent, what the policy did and its first failed stage (outcomes.py), clipped actions, steps,
 the policy error, the video, the instruction given (and the task's own, where another was
-given) and the observation parts the policy read. Files written before a column was
+given), the observation parts the policy read and the hash of its whole trajectory
+(runner.trajectory_hash: what a rerun reproduces). Files written before a column was
 added lack it (COLUMNS after the first seven). Byte-identical for the same records."""
 
 from __future__ import annotations
@@ -23,8 +24,9 @@ from robofollow.files import write_bytes_atomic
 
 COLUMNS = ("episode", "hash", "split", "motion", "intent", "execution", "complete", "start",
            "layout", "seed", "chance_is", "chance_cr", "followed", "did", "failed", "reason",
-           "clipped", "steps", "error", "video", "instruction", "task_instruction", "observed")
-REPORTED = COLUMNS[8:-2]  # what a report rebuilt from the file needs beyond the scores
+           "clipped", "steps", "error", "video", "instruction", "task_instruction", "observed",
+           "trajectory")
+REPORTED = COLUMNS[8:COLUMNS.index("task_instruction")]  # what a report rebuilt from the file needs beyond the scores
 
 
 def score_rows(results: list[dict]) -> list[dict]:
@@ -49,7 +51,8 @@ def _row(r: dict) -> dict:
             "error": r.get("error") or "", "video": r.get("video") or "",
             "instruction": r.get("instruction") or "",
             "task_instruction": r.get("task_instruction") or "",
-            "observed": ",".join(r.get("observed", ()))}
+            "observed": ",".join(r.get("observed", ())),
+            "trajectory": hashes.get("trajectory", "")}
 
 
 def _number(value: float | None) -> str:
@@ -101,6 +104,8 @@ def _record(row: dict) -> dict:
               "intent_score": row["intent"], "execution_score": row["execution"],
               "complete": row["complete"],
               "hashes": {"episode": row["hash"], "split": row["split"], "start": row["start"]}}
+    if row.get("trajectory"):
+        record["hashes"]["trajectory"] = row["trajectory"]
     if "did" not in row:  # written before the file kept what the report reads
         return record
     if row["chance_is"]:

@@ -27,10 +27,9 @@ if [ ! -f "$DATA/manifest.json" ]; then
     timed generate robofollow generate specs --out "$DATA" --workers "$WORKERS" --quiet \
         $(started "$DATA")
 fi
-# Trainings run in two lanes, each pinned to one core: on a 2-core CPU two one-core runs train
-# 1.5x faster together than one run on both cores (XLA's small convolutions scale poorly), and
-# XLA's older CPU runtime runs them ~20% faster still (3.5 against 2.8 steps/s on one core).
-export XLA_FLAGS=${XLA_FLAGS:---xla_cpu_use_thunk_runtime=false}
+# Trainings run in two lanes, each pinned to one core: XLA's small convolutions scale poorly
+# over cores, so two one-core runs side by side train faster than one after the other on both
+# (rates measured in README.md, "Costs").
 trained() { python -c "import json,sys; d=json.load(open('$1/policy.json'));
 sys.exit(d['training']['steps'] < $STEPS)" 2>/dev/null; }
 lane() {  # core, kinds...: train each kind in turn on that core
