@@ -118,7 +118,7 @@ def test_a_run_whose_policy_reads_objects_says_perception_was_removed(tmp_path):
     from robofollow.eval.tables import table_text
 
     assert "Perception removed" in write_report(tmp_path / "run")[1].read_text()
-    assert "removed: the policy read the objects observation" in table_text(result)
+    assert "\nObjects   perception removed: the policy read the objects" in table_text(result)
     record = json.loads((tmp_path / "run" / "episodes.jsonl").read_text().splitlines()[0])
     assert record["observed"] == ["objects", "state"]
 

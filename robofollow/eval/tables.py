@@ -56,8 +56,8 @@ def table_text(summary: dict) -> str:
         lines += _wrapped("Followed", f"IS {references['followed_IS']:.1f}   (perfectly "
                           "following the instructions given)")
     if perception_removed(summary):
-        lines += _wrapped("Perception", "removed: the policy read the objects observation "
-                          "(ground truth), not camera images")
+        lines += _wrapped("Objects", "perception removed: the policy read the objects "
+                          "observation (ground truth), not camera images")
     if any(c["episodes"] < FEW for row in cells.values() for c in row.values()):
         lines += _wrapped(MARK, f"fewer than {FEW} episodes: read the cell with its 95% "
                           "interval over tasks, in the report")
