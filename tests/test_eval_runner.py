@@ -113,12 +113,12 @@ def test_a_killed_run_resumes_with_every_episode_once_and_the_same_summary(exper
     assert again[:len(kept)] == kept
     first = read_results(expert_run / "episodes.jsonl")
     assert _trajectories(again) == _trajectories(first)  # every episode reproduced exactly
+    assert (out / "summary.json").read_text() == (expert_run / "summary.json").read_text()
+    assert "| scene1 | 100.0 | 100.0 | 100.0 |" in (out / "report.md").read_text()
 
 
 def _trajectories(records: list[dict]) -> dict[str, str]:
     return {r["episode"]: r["hashes"]["trajectory"] for r in records}
-    assert (out / "summary.json").read_text() == (expert_run / "summary.json").read_text()
-    assert "| scene1 | 100.0 | 100.0 | 100.0 |" in (out / "report.md").read_text()
 
 
 def test_a_run_folder_is_not_reused_with_other_options(tmp_path):

@@ -15,7 +15,8 @@ from robofollow.eval.runner import EvalOptions, evaluate
 from robofollow.eval.serving import observation_layout
 from robofollow.eval.tcp_server import TcpPolicyServer
 from robofollow.eval.websocket_server import PolicyServer
-from robofollow.sim.objects import FIELDS, SHAPE, observe_objects
+from robofollow.sim.objects import FIELDS, SHAPE, _rows, objects_over, observe_objects
+from robofollow.sim.recorder import Recorder
 from robofollow.sim.stage import Stage
 from tests.server_helpers import served
 from tests.sim_helpers import benchmark, cached_benchmark
@@ -92,6 +93,42 @@ def test_the_observation_carries_no_identity():
     stage.close()
 
 
+def test_the_row_order_is_a_function_of_the_values_alone():
+    """Bodies listed in any order give the same rows, also where two share x and y (a cube in
+    a bowl): ties are broken by the other columns, never by the body's place in the layout."""
+    rng = np.random.default_rng(0)
+    looks = rng.random((5, 12))
+    positions = rng.random((5, 3))
+    positions[3, :2] = positions[1, :2]  # body 3 sits on body 1
+    positions[4, 0] = positions[2, 0] + 1e-13  # an x within float noise of another's
+    quaternions = rng.standard_normal((5, 4))
+    quaternions /= np.linalg.norm(quaternions, axis=1, keepdims=True)
+    rows = _rows(looks, positions, quaternions)
+    for _ in range(6):
+        order = rng.permutation(5)
+        assert np.array_equal(_rows(looks[order], positions[order], quaternions[order]), rows)
+    x = FIELDS.index("x")
+    assert np.all(np.diff(rows[:5, x]) >= 0)
+
+
+def test_a_recording_gives_at_every_frame_what_a_policy_reads_there():
+    """The dataset's environment_state (objects_over a recording) equals the live
+    observation at every frame."""
+    stage = _stage("scene4", "scene4_1")  # a cube in the bowl: rows tied in x and y
+    sim = stage.sim
+    recorder, live = Recorder(sim), []
+    rng = np.random.default_rng(1)
+    action = sim.state()
+    for _ in range(40):
+        recorder.frame(action)
+        live.append(observe_objects(sim))
+        action = action + rng.normal(0, 0.02, size=action.shape)
+        sim.step(action)
+    recorded = objects_over(recorder.trajectory(), sim.scene, sim.layout)
+    assert np.array_equal(recorded, np.stack(live))
+    stage.close()
+
+
 def test_servers_declare_the_objects_observation_and_pass_it_to_their_policy(tmp_path):
     layout = observation_layout(frozenset({"state", "objects"}), channels_first=True)
     assert layout["objects"] == {"dtype": "float32", "shape": list(SHAPE),
@@ -119,6 +156,10 @@ def test_a_run_whose_policy_reads_objects_says_perception_was_removed(tmp_path):
 
     assert "Perception removed" in write_report(tmp_path / "run")[1].read_text()
     assert "\nObjects   perception removed: the policy read the objects" in table_text(result)
+    both = dict(result, observed=["images", "objects", "state"])
+    assert "ground truth added: the policy read the objects observation (ground truth) beside " \
+        "camera images" in " ".join(table_text(both).split())
+    assert "Objects" not in table_text(dict(result, observed=["images", "state"]))
     record = json.loads((tmp_path / "run" / "episodes.jsonl").read_text().splitlines()[0])
     assert record["observed"] == ["objects", "state"]
 

@@ -13,6 +13,7 @@ from robofollow.compiler.observation import look_alike, same_observation
 from robofollow.compiler.parser import parse
 from robofollow.compiler.spec_loader import load_spec
 from robofollow.compiler.world import World
+from robofollow.sim.objects import FIELDS, observe_objects
 from robofollow.sim.simulation import Simulation
 from robofollow.vqa.answers import named
 
@@ -158,3 +159,17 @@ def test_a_bad_recolor_is_reported_where_it_is_written(tmp_path, capsys, old, ne
     err = capsys.readouterr().err
     assert status == 1 and "Traceback" not in err
     assert err.splitlines()[0] == f"{folder / 'bad.rf'}:{line}:{column}: error[{code}]: {message}"
+
+
+def test_the_objects_observation_reports_the_layout_s_colours(compiled):
+    scene = compiled.spec.scenes["recolour"]
+    colours = {}
+    for layout in ("default", "swapped", "repainted"):
+        sim = Simulation(scene, layout)
+        sim.reset(None)
+        rows = observe_objects(sim)
+        red, blue = FIELDS.index("red"), FIELDS.index("blue")
+        colours[layout] = [tuple(row[red:blue + 1]) for row in rows[:3]]  # by x: left first
+    assert colours["default"][0] == colours["repainted"][0][::-1] == (1.0, 0.0, 0.0)
+    assert colours["repainted"] == colours["swapped"]  # it looks like `swapped` ...
+    assert colours["repainted"] != colours["default"]  # ... not like `default`

@@ -49,11 +49,11 @@ class Options:
         return dict(asdict(self), tasks=list(self.tasks))
 
 
-def dataset_arrays(trajectory: Trajectory, scene: Scene) -> dict[str, np.ndarray]:
+def dataset_arrays(trajectory: Trajectory, scene: Scene, layout: str) -> dict[str, np.ndarray]:
     """Observation t is the state (and the objects observation, flattened) before acting;
     action t is the joint target sent next (the recording's action at t + 1). The final
     observation has no action and is dropped."""
-    objects = objects_over(trajectory, scene)[:-1]
+    objects = objects_over(trajectory, scene, layout)[:-1]
     return {"state": robot.observed_state(trajectory.state[:-1]),
             "environment_state": objects.reshape(len(objects), -1),
             "action": trajectory.action[1:].astype(np.float32)}
@@ -125,7 +125,8 @@ class UnitRecorder:
             if not run.achieved:
                 raise RejectedAttemptError("the oracle scored it incomplete: "
                                            + "; ".join(run.score.failures))
-            arrays = dataset_arrays(run.trajectory, self.compiled.spec.scenes[job.scene])
+            arrays = dataset_arrays(run.trajectory, self.compiled.spec.scenes[job.scene],
+                                    job.layout)
             length = len(arrays["action"])
             if sink.frames != length:
                 raise RuntimeError(f"{job.key}: {sink.frames} frames for {length} actions")

@@ -19,7 +19,7 @@ from robofollow.eval.drops import level_drops, origin
 from robofollow.eval.outcomes import DID, UNRECOGNISED, closest, first_failure, kind, kinds
 from robofollow.eval.pages import shade
 from robofollow.eval.runner import EvalOptions, summary
-from robofollow.eval.tables import perception_removed
+from robofollow.eval.tables import ground_truth
 from robofollow.oracle.metrics import METRICS, MOTIONS, references, scores, shown_interval
 
 VIDEO_LINK = re.compile(r"videos/[A-Za-z0-9_.#@-]+\.mp4")  # what the runner writes
@@ -244,7 +244,7 @@ def report_data(name: str, options: EvalOptions, results: list[dict],
     shown = kinds(results)
     data = {
         "name": name, "options": options, "summary": totals, "levels": levels,
-        "perception_removed": perception_removed(totals),
+        "ground_truth": ground_truth(totals),
         "table": table, "grid": _grid(table),
         "with_chance": all("chance_IS" in cell for cell in table),
         "level_averages": level_averages(cells, levels),

@@ -26,7 +26,8 @@ COLUMNS = ("episode", "hash", "split", "motion", "intent", "execution", "complet
            "layout", "seed", "chance_is", "chance_cr", "followed", "did", "failed", "reason",
            "clipped", "steps", "error", "video", "instruction", "task_instruction", "observed",
            "trajectory")
-REPORTED = COLUMNS[8:COLUMNS.index("task_instruction")]  # what a report rebuilt from the file needs beyond the scores
+# what a report rebuilt from the file needs beyond the scores
+REPORTED = COLUMNS[8:COLUMNS.index("task_instruction")]
 
 
 def score_rows(results: list[dict]) -> list[dict]:

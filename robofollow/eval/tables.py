@@ -55,19 +55,28 @@ def table_text(summary: dict) -> str:
     if "followed_IS" in references and references["followed_IS"] < 100:
         lines += _wrapped("Followed", f"IS {references['followed_IS']:.1f}   (perfectly "
                           "following the instructions given)")
-    if perception_removed(summary):
-        lines += _wrapped("Objects", "perception removed: the policy read the objects "
-                          "observation (ground truth), not camera images")
+    seen = ground_truth(summary)
+    if seen:
+        lines += _wrapped("Objects", f"{GROUND_TRUTH[seen]}: the policy read the objects "
+                          "observation (ground truth)"
+                          + (", not camera images" if seen == "removed" else
+                             " beside camera images"))
     if any(c["episodes"] < FEW for row in cells.values() for c in row.values()):
         lines += _wrapped(MARK, f"fewer than {FEW} episodes: read the cell with its 95% "
                           "interval over tasks, in the report")
     return "\n".join(line.rstrip() for line in lines)
 
 
-def perception_removed(summary: dict) -> bool:
-    """Whether the run's policy read the objects observation instead of camera images."""
+GROUND_TRUTH = {"removed": "perception removed", "added": "ground truth added"}
+
+
+def ground_truth(summary: dict) -> str | None:
+    """Whether the run's policy read the objects observation: instead of camera images
+    ("removed": perception removed), beside them ("added"), or not at all (None)."""
     observed = summary.get("observed", ())
-    return "objects" in observed and "images" not in observed
+    if "objects" not in observed:
+        return None
+    return "added" if "images" in observed else "removed"
 
 
 def _motion_rows(row: dict, levels: list[str]) -> list[str]:

@@ -3,8 +3,8 @@
 `text` reads the instruction's words; `form` reads its canonical logical form as the parser
 prints it (`pick(left, cylinder[red])`), brackets and commas included, so that paraphrases of one
 task read alike; `blind` reads nothing. The objects kinds read as their language does
-(`objects-text` as `text`, `objects-form` as `form`). Token 0 pads, token 1 stands for a word the vocabulary
-lacks (or an instruction the parser rejects, for `form`).
+(`objects-text` as `text`, `objects-form` as `form`). Token 0 pads, token 1 stands for a word
+the vocabulary lacks (or an instruction the parser rejects, for `form`).
 """
 
 from __future__ import annotations
