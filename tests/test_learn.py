@@ -222,13 +222,18 @@ def test_shipped_baselines_load_by_name():
     from robofollow.learn.policy import shipped_names
 
     assert {"scene2-text", "scene2-blind"} <= set(shipped_names())
+    objects = np.zeros(OBJECTS_SHAPE, np.float32)
+    objects[:2, 0] = 1.0  # two bodies present
     observation = {"state": np.zeros(14), "instruction": "Pick up the left cube.",
-                   "images": {"cam_high": np.full((240, 320, 3), 120, np.uint8)}}
+                   "images": {"cam_high": np.full((240, 320, 3), 120, np.uint8)},
+                   "objects": objects}
     for name in shipped_names():
         policy = load_policy(f"baseline:{name}")
         chunk = policy.act(observation)
         assert chunk.shape == (policy.ckpt.execute, 14) and np.all(np.isfinite(chunk))
         assert np.array_equal(chunk, policy.act(observation))
+        if "images" not in policy.uses:
+            continue
         with pytest.raises(ValueError, match="whole multiple"):
             policy.act({**observation, "images": {"cam_high": np.zeros((100, 100, 3),
                                                                        np.uint8)}})
