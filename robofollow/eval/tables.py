@@ -57,17 +57,18 @@ def table_text(summary: dict) -> str:
                           "following the instructions given)")
     seen = ground_truth(summary)
     if seen:
-        lines += _wrapped("Objects", f"{GROUND_TRUTH[seen]}: the policy read the objects "
-                          "observation (ground truth)"
-                          + (", not camera images" if seen == "removed" else
-                             " beside camera images"))
+        lines += _wrapped("Objects", GROUND_TRUTH[seen])
     if any(c["episodes"] < FEW for row in cells.values() for c in row.values()):
         lines += _wrapped(MARK, f"fewer than {FEW} episodes: read the cell with its 95% "
                           "interval over tasks, in the report")
     return "\n".join(line.rstrip() for line in lines)
 
 
-GROUND_TRUTH = {"removed": "perception removed", "added": "ground truth added"}
+GROUND_TRUTH = {  # the table's line for each answer of ground_truth
+    "removed": "perception removed: the policy read the objects observation (ground truth), "
+               "not camera images",
+    "added": "ground truth added: the policy read the objects observation (ground truth) "
+             "beside camera images"}
 
 
 def ground_truth(summary: dict) -> str | None:

@@ -29,7 +29,7 @@ if [ ! -f "$DATA/manifest.json" ]; then
 fi
 # Trainings run in two lanes, each pinned to one core: XLA's small convolutions scale poorly
 # over cores, so two one-core runs side by side train faster than one after the other on both
-# (rates measured in README.md, "Costs").
+# (rates measured in docs/datasets-and-training.md, "The five on the whole benchmark").
 trained() { python -c "import json,sys; d=json.load(open('$1/policy.json'));
 sys.exit(d['training']['steps'] < $STEPS)" 2>/dev/null; }
 lane() {  # core, kinds...: train each kind in turn on that core
