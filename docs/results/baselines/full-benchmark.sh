@@ -5,21 +5,22 @@
 #   2. text, blind, form, objects-text and objects-form trained on all of it
 #   3. each evaluated on every test task, 10 rounds; text and objects-text with an
 #      empty-instruction control arm
-# Environment: DATA (dataset folder), RUNS (checkpoints and runs), WORKERS (processes),
-# STEPS (training steps per baseline).
+# Environment: DATA (dataset folder), RUNS (checkpoints and runs), WORKERS (cores, one lane
+# each: 1 or 2), STEPS (training steps per baseline), PARTS (shards per evaluation).
 set -euo pipefail
 DATA=${DATA:-data/full-demos}
 RUNS=${RUNS:-runs/full}
 WORKERS=${WORKERS:-2}
-STEPS=${STEPS:-30000}
-mkdir -p "$RUNS"
+STEPS=${STEPS:-60000}
+PARTS=${PARTS:-8}
+mkdir -p "$RUNS/parts"
 
 started() { [ -e "$1" ] && echo "--resume" || true; }  # a folder the step already began
 timed() {  # name, command...: append the step's wall time to RUNS/times.log
     local name=$1 start
     shift
     start=$(date +%s)
-    "$@"
+    "$@" || return
     echo "$name $(( $(date +%s) - start )) s" >> "$RUNS/times.log"
 }
 
@@ -27,12 +28,13 @@ if [ ! -f "$DATA/manifest.json" ]; then
     timed generate robofollow generate specs --out "$DATA" --workers "$WORKERS" --quiet \
         $(started "$DATA")
 fi
+
 # Trainings run in two lanes, each pinned to one core: XLA's small convolutions scale poorly
 # over cores, so two one-core runs side by side train faster than one after the other on both
 # (rates measured in docs/datasets-and-training.md, "The five on the whole benchmark").
 trained() { python -c "import json,sys; d=json.load(open('$1/policy.json'));
 sys.exit(d['training']['steps'] < $STEPS)" 2>/dev/null; }
-lane() {  # core, kinds...: train each kind in turn on that core
+train() {  # core, kinds...: train each kind in turn on that core
     local core=$1 kind ckpt
     shift
     for kind in "$@"; do
@@ -42,16 +44,53 @@ lane() {  # core, kinds...: train each kind in turn on that core
             $(started "$ckpt/policy.json")
     done
 }
+
+# Every evaluation (and control arm) runs in PARTS shards. A lane whose trainings are done
+# takes the next shard no other lane holds (flock) whose checkpoint is trained, so neither
+# core idles while shards are left; the shards are merged into one run at the end.
+ARMS="objects-form:normal objects-text:normal objects-text:empty text:normal text:empty
+blind:normal form:normal"
+done_run() { [ -f "$1/summary.json" ] && [ -f "$1/report.html" ]; }
+evaluate() {  # core: evaluate shards until none is left
+    local core=$1 arm kind mode i part left rc
+    while :; do
+        left=0
+        for arm in $ARMS; do
+            kind=${arm%:*} mode=${arm#*:}
+            for i in $(seq 1 "$PARTS"); do
+                part="$RUNS/parts/eval-$kind-$mode-$i"
+                done_run "$part" && continue
+                left=1
+                trained "$RUNS/ckpt-$kind" || continue
+                rc=0
+                (
+                    flock -n 9 || exit 75  # another lane has this shard
+                    done_run "$part" && exit 0  # or had it, since the check above
+                    timed "eval-$kind-$mode-$i" taskset -c "$core" robofollow eval \
+                        --policy "$RUNS/ckpt-$kind" --out "$part" --quiet --workers 1 \
+                        --instruction-mode "$mode" --shard "$i/$PARTS" \
+                        $(started "$part/run.json")
+                ) 9> "$part.lock" || rc=$?
+                [ "$rc" = 0 ] || [ "$rc" = 75 ] || return "$rc"
+            done
+        done
+        [ "$left" = 0 ] && return
+        sleep 60  # the shards left wait for a training or for the other lane
+    done
+}
+lane() { train "$@"; evaluate "$1"; }
 lane 0 objects-form objects-text text & first=$!
 lane $(( 1 % WORKERS )) blind form & second=$!
 wait "$first"
 wait "$second"
-for kind in objects-form objects-text text form blind; do
+
+for arm in $ARMS; do
+    kind=${arm%:*} mode=${arm#*:}
     run="$RUNS/eval-$kind"
-    controls=()
-    case $kind in text | objects-text) controls=(--controls empty) ;; esac
-    if [ ! -f "$run/summary.json" ] || [ ! -f "$run/report.html" ]; then
-        timed "eval-$kind" robofollow eval --policy "$RUNS/ckpt-$kind" --out "$run" \
-            --workers "$WORKERS" --quiet "${controls[@]}" $(started "$run/run.json")
-    fi
+    [ "$mode" = normal ] || run="$run/controls/$mode"
+    [ -f "$run/summary.json" ] || robofollow merge --out "$run" \
+        $(for i in $(seq 1 "$PARTS"); do echo "$RUNS/parts/eval-$kind-$mode-$i"; done)
+done
+for kind in text objects-text; do  # the report again, with the language effect
+    robofollow report "$RUNS/eval-$kind" > /dev/null
 done
