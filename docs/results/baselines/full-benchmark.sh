@@ -6,12 +6,14 @@
 #   3. each evaluated on every test task, 10 rounds; text and objects-text with an
 #      empty-instruction control arm
 # Environment: DATA (dataset folder), RUNS (checkpoints and runs), WORKERS (cores, one lane
-# each: 1 or 2), STEPS (training steps per baseline), PARTS (shards per evaluation).
+# each: 1 or 2), STEPS (training steps of the image kinds), OBJECT_STEPS (of the objects
+# kinds), PARTS (shards per evaluation).
 set -euo pipefail
 DATA=${DATA:-data/full-demos}
 RUNS=${RUNS:-runs/full}
 WORKERS=${WORKERS:-2}
 STEPS=${STEPS:-60000}
+OBJECT_STEPS=${OBJECT_STEPS:-120000}
 PARTS=${PARTS:-8}
 mkdir -p "$RUNS/parts"
 
@@ -32,15 +34,16 @@ fi
 # Trainings run in two lanes, each pinned to one core: XLA's small convolutions scale poorly
 # over cores, so two one-core runs side by side train faster than one after the other on both
 # (rates measured in docs/datasets-and-training.md, "The five on the whole benchmark").
-trained() { python -c "import json,sys; d=json.load(open('$1/policy.json'));
-sys.exit(d['training']['steps'] < $STEPS)" 2>/dev/null; }
+steps() { case $1 in objects-*) echo "$OBJECT_STEPS" ;; *) echo "$STEPS" ;; esac; }
+trained() { python -c "import json,sys; d=json.load(open('$RUNS/ckpt-$1/policy.json'));
+sys.exit(d['training']['steps'] < $(steps "$1"))" 2>/dev/null; }
 train() {  # core, kinds...: train each kind in turn on that core
     local core=$1 kind ckpt
     shift
     for kind in "$@"; do
         ckpt="$RUNS/ckpt-$kind"
-        trained "$ckpt" || timed "train-$kind" taskset -c "$core" robofollow train "$DATA" \
-            --policy "$kind" --out "$ckpt" --steps "$STEPS" --quiet \
+        trained "$kind" || timed "train-$kind" taskset -c "$core" robofollow train "$DATA" \
+            --policy "$kind" --out "$ckpt" --steps "$(steps "$kind")" --quiet \
             $(started "$ckpt/policy.json")
     done
 }
@@ -61,7 +64,7 @@ evaluate() {  # core: evaluate shards until none is left
                 part="$RUNS/parts/eval-$kind-$mode-$i"
                 done_run "$part" && continue
                 left=1
-                trained "$RUNS/ckpt-$kind" || continue
+                trained "$kind" || continue
                 rc=0
                 (
                     flock -n 9 || exit 75  # another lane has this shard
