@@ -93,7 +93,6 @@ for arm in $ARMS; do
     [ "$mode" = normal ] || run="$run/controls/$mode"
     [ -f "$run/summary.json" ] || robofollow merge --out "$run" \
         $(for i in $(seq 1 "$PARTS"); do echo "$RUNS/parts/eval-$kind-$mode-$i"; done)
-done
-for kind in text objects-text; do  # the report again, with the language effect
-    robofollow report "$RUNS/eval-$kind" > /dev/null
+    # a control arm: the run's report again, with the language effect
+    [ "$mode" = normal ] || robofollow report "$RUNS/eval-$kind" > /dev/null
 done
