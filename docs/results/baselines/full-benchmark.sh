@@ -82,8 +82,8 @@ evaluate() {  # core: evaluate shards until none is left
     done
 }
 lane() { train "$@"; evaluate "$1"; }
-lane 0 objects-form objects-text text & first=$!
-lane $(( 1 % WORKERS )) blind form & second=$!
+lane 0 objects-text objects-form blind & first=$!
+lane $(( 1 % WORKERS )) text form & second=$!
 wait "$first"
 wait "$second"
 
