@@ -66,8 +66,9 @@ def test_audit_json_has_the_documented_keys(capsys):
     assert cli.main(["audit", str(SPECS), "--json"]) == 0
     report = json.loads(capsys.readouterr().out)
     assert {"scene_entropy_bits", "groups", "counts", "leakage", "repertoire_violations",
-            "ambiguities", "rejected"} <= set(report)
+            "ambiguities", "rejected", "blind_best"} <= set(report)
     assert isinstance(report["scene_entropy_bits"], float)
+    assert set(report["blind_best"]) == set(report["counts"])
     assert all({"layout", "tasks"} <= set(g) for g in report["groups"])
 
 

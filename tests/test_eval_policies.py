@@ -17,9 +17,9 @@ from robofollow.eval.policy import BadActionError, validate_actions
 from robofollow.eval.reference import (
     REFERENCE_POLICIES,
     BlindPolicy,
-    available_behaviours,
     understood,
 )
+from robofollow.oracle.chance import available_behaviours
 from robofollow.sim import CHUNK, MAX_STEPS, robot
 from tests.sim_helpers import benchmark, episode
 

@@ -1,6 +1,7 @@
 """Chance levels decided from the goal DAGs: the Intent a perfectly executed behaviour earns
-when another was asked for, a language-blind guess's expectations, and (end to end) the Intent
-the scorer gives the expert performing another task's instruction."""
+when another was asked for, a language-blind guess's expectations and its best in each test
+cell, and (end to end) the Intent the scorer gives the expert performing another task's
+instruction."""
 
 from __future__ import annotations
 
@@ -12,10 +13,19 @@ from robofollow.eval.chance import references
 from robofollow.eval.episode import run_episode
 from robofollow.eval.instructions import given_instruction
 from robofollow.eval.reference import REFERENCE_POLICIES
-from robofollow.oracle.chance import completes_if_performed, guessing, intent_if_performed
+from robofollow.compiler.spec import LEVELS
+from robofollow.compiler.world import World
+from robofollow.oracle.chance import (
+    available_behaviours,
+    best_guess,
+    completes_if_performed,
+    guessing,
+    intent_if_performed,
+)
 from tests.sim_helpers import benchmark, episode
 
-TRAINING = benchmark().training
+COMPILED = benchmark()
+TRAINING = COMPILED.training
 LABELS = sorted(TRAINING)
 
 
@@ -48,6 +58,38 @@ def test_a_blind_guess_completes_with_probability_one_in_k_for_distinct_behaviou
                                               "pickup_red_cylinder", "pickup_blue_cylinder")]
     assert guessing(choices[0], choices) == {"IS": 0.25, "CR": 0.25}
     assert guessing(choices[0], []) == {"IS": 0.0, "CR": 0.0}
+
+
+def test_the_best_blind_guess_is_the_one_behaviour_that_earns_most_over_the_asked_ones():
+    left, right = TRAINING["pickup_left_cube"], TRAINING["pickup_right_cube"]
+    stack = TRAINING["stack_left_cube_on_red_cylinder"]
+    # the left cube twice and the right one once: going for the left cube earns 2 of 3
+    assert best_guess([left, left, right], [right, left]) == {"IS": 2.0, "CR": 2.0}
+    # stacking the left cube on the red cylinder when asked to stack it on the blue one:
+    # the source stage only, and no completion
+    blue = TRAINING["stack_left_cube_on_blue_cylinder"]
+    assert best_guess([blue], [stack]) == {"IS": 0.4, "CR": 0.0}
+    assert best_guess([left], []) == {"IS": 0.0, "CR": 0.0}
+
+
+def test_in_every_generated_cell_the_best_blind_guess_is_between_chance_and_following():
+    best = COMPILED.report["blind_best"]
+    for scene_id, scene in COMPILED.spec.scenes.items():
+        candidates = COMPILED.candidates(scene_id)
+        for level in LEVELS:
+            tasks = [t for t in COMPILED.splits.tasks if t.scene == scene_id and t.level == level]
+            chance = [guessing(t.behaviour, [candidates[label] for label in available_behaviours(
+                World(scene, t.layout), candidates)]) for t in tasks]
+            for metric in ("IS", "CR"):  # (the audit keeps one decimal)
+                uniform = 100 * sum(c[metric] for c in chance) / len(tasks)
+                assert uniform - 0.06 <= best[scene_id][level][metric] <= 100.0, (
+                    scene_id, level, metric)
+        # on the training layout each training task's own behaviour is a choice: the best
+        # guess completes at least the largest group of L0 tasks that ask for one behaviour
+        l0 = [t for t in COMPILED.splits.tasks if t.scene == scene_id and t.level == "L0"]
+        most = max(sum(completes_if_performed(t.behaviour, candidates[label]) for t in l0)
+                   for label in {t.origin for t in l0})
+        assert best[scene_id]["L0"]["CR"] >= 100 * most / len(l0) - 0.06
 
 
 @settings(max_examples=200, deadline=None)

@@ -13,6 +13,7 @@ from types import MappingProxyType
 
 from robofollow.audit.splits import audit, findings
 from robofollow.audit.task_list import listed_tests
+from robofollow.benchmark.guessing import blind_best
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.spec import Spec
 from robofollow.compiler.spec_files import spec_files
@@ -109,7 +110,9 @@ def _compile(specs: Path | list[Path]) -> Compiled:
     if errors:
         raise SpecErrors(errors)
     splits, examined = generate_examined(spec, training, listed)
-    return Compiled.of(spec, splits, training, audit(spec, training, splits, examined))
+    report = audit(spec, training, splits, examined)
+    report["blind_best"] = blind_best(spec, training, splits.tasks)
+    return Compiled.of(spec, splits, training, report)
 
 
 def clean(compiled: Compiled) -> bool:

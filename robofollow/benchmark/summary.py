@@ -22,6 +22,7 @@ def summary(compiled: Compiled, changes: str = "") -> str:
              "          " + "".join(f"{level:>6}" for level in LEVELS)]
     for scene, counts in report["counts"].items():
         lines.append(f"{scene:<10}" + "".join(f"{counts[level]:>6}" for level in LEVELS))
+    lines += _blind_best_text(report["blind_best"])
     lines += _motion_text(compiled)
     lines += _rules_text(report["split_rules"])
     same = report["same_behaviour"]
@@ -34,6 +35,18 @@ def summary(compiled: Compiled, changes: str = "") -> str:
         lines.append(f"{title}: {len(items) or 'none'}")
         lines += [f"  {item['task']}: {item['finding']}" for item in items[:20]]
     return "\n".join(lines) + "\n" + changes
+
+
+def _blind_best_text(best: dict) -> list[str]:
+    """Per scene and level, the Intent and completion of the best language-blind guess."""
+    lines = ["", ("the best language-blind guess, IS / CR (on each layout the one training "
+                  "behaviour that earns most over the cell's tests; chance is a uniform guess):"),
+             "          " + "".join(f"{level:>12}" for level in LEVELS)]
+    for scene, levels in best.items():
+        lines.append((f"{scene:<10}" + "".join(
+            f"{levels[level]['IS']:>6.1f}/{levels[level]['CR']:<5.1f}" if level in levels
+            else f"{'.':>12}" for level in LEVELS)).rstrip())
+    return lines
 
 
 def _motion_text(compiled: Compiled) -> list[str]:

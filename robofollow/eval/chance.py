@@ -16,8 +16,8 @@ from __future__ import annotations
 from robofollow.benchmark.episode import Benchmark, Episode
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
-from robofollow.eval.reference import available_behaviours, understood
-from robofollow.oracle.chance import guessing, intent_if_performed
+from robofollow.eval.reference import understood
+from robofollow.oracle.chance import available_behaviours, guessing, intent_if_performed
 
 
 def references(compiled: Benchmark, episode: Episode, instruction: str) -> dict:

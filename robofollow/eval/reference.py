@@ -25,6 +25,7 @@ from robofollow.compiler.spec import Scene
 from robofollow.compiler.world import World
 from robofollow.errors import RoboFollowError
 from robofollow.eval.policy import Privileged
+from robofollow.oracle.chance import available_behaviours
 from robofollow.sim import CHUNK, robot
 from robofollow.sim.expert import Expert
 
@@ -93,14 +94,6 @@ class ExpertPolicy(_Scripted):
         except RoboFollowError:  # not an instruction it understands here: it stays at home
             return _hold()
         return _perform(behaviour, privileged)
-
-
-def available_behaviours(world: World, training: dict[str, Behaviour]) -> list[str]:
-    """Labels of the training behaviours whose objects the layout has, in order."""
-    placed = set(world.poses)
-    return [label for label, behaviour in training.items()
-            if all({s.source, s.target, *(body for _, body in s.waypoints)} - {None} <= placed
-                   for s in behaviour.steps)]
 
 
 class BlindPolicy(_Scripted):

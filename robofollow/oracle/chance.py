@@ -12,20 +12,40 @@ the asked one with probability 1/K: the chance level scene entropy H(T|S) implie
 from __future__ import annotations
 
 import json
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from robofollow.compiler.behaviour import Behaviour
 from robofollow.compiler.goals import scoring_nodes
 from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
+from robofollow.compiler.world import World
+
+Checks = tuple[list, tuple | None]  # (weight, check) of the working stages, and of the finish
 
 
 def intent_if_performed(asked: Behaviour, performed: Behaviour,
                         profile: ScoringProfile = DEFAULT_PROFILE) -> float:
     """The Intent score (0-1) of performing `performed` perfectly when `asked` is scored."""
-    asked_work, asked_finish = _intent_checks(asked, profile)
-    performed_work, performed_finish = _intent_checks(performed, profile)
+    return _earned(_intent_checks(asked, profile), _intent_checks(performed, profile))
+
+
+def passes_work(asked: Behaviour, performed: Behaviour,
+                profile: ScoringProfile = DEFAULT_PROFILE) -> bool:
+    """Whether performing `performed` passes every working (not finishing) Intent check of
+    `asked`, in order."""
+    return _passes(_intent_checks(asked, profile), _intent_checks(performed, profile))
+
+
+def completes_if_performed(asked: Behaviour, performed: Behaviour,
+                           profile: ScoringProfile = DEFAULT_PROFILE) -> bool:
+    """Whether performing `performed` perfectly completes `asked`."""
+    return _completes(asked, _intent_checks(asked, profile), _intent_checks(performed, profile),
+                      profile)
+
+
+def _earned(asked: Checks, performed: Checks) -> float:
+    (asked_work, asked_finish), (performed_work, performed_finish) = asked, performed
     earned = 0.0
     for index, (weight, check) in enumerate(asked_work):
         if index >= len(performed_work) or performed_work[index][1] != check:
@@ -36,26 +56,21 @@ def intent_if_performed(asked: Behaviour, performed: Behaviour,
     return round(earned, 6)
 
 
-def passes_work(asked: Behaviour, performed: Behaviour,
-                profile: ScoringProfile = DEFAULT_PROFILE) -> bool:
-    """Whether performing `performed` passes every working (not finishing) Intent check of
-    `asked`, in order."""
-    asked_work, _ = _intent_checks(asked, profile)
-    performed_work, _ = _intent_checks(performed, profile)
+def _passes(asked: Checks, performed: Checks) -> bool:
+    asked_work, performed_work = asked[0], performed[0]
     return [c for _, c in performed_work[:len(asked_work)]] == [c for _, c in asked_work]
 
 
-def completes_if_performed(asked: Behaviour, performed: Behaviour,
-                           profile: ScoringProfile = DEFAULT_PROFILE) -> bool:
-    """Whether performing `performed` perfectly completes `asked`."""
+def _completes(asked: Behaviour, asked_checks: Checks, performed: Checks,
+               profile: ScoringProfile) -> bool:
     if asked.steps and all(step.action == "pick" for step in asked.steps):
-        return intent_if_performed(asked, performed, profile) >= profile.pickup_complete - 1e-6
+        return _earned(asked_checks, performed) >= profile.pickup_complete - 1e-6
     if not asked.steps:
-        return intent_if_performed(asked, performed, profile) >= 1.0 - 1e-6
-    return passes_work(asked, performed, profile)
+        return _earned(asked_checks, performed) >= 1.0 - 1e-6
+    return _passes(asked_checks, performed)
 
 
-def _intent_checks(behaviour: Behaviour, profile: ScoringProfile) -> tuple[list, tuple | None]:
+def _intent_checks(behaviour: Behaviour, profile: ScoringProfile) -> Checks:
     """(weight, Intent check) of the working stages in scoring order, and of the finish."""
     work, finish = [], None
     for _, node, _ in scoring_nodes(behaviour, profile):
@@ -77,3 +92,28 @@ def guessing(asked: Behaviour, choices: Sequence[Behaviour],
     earned = [intent_if_performed(asked, c, profile) for c in choices]
     done = [completes_if_performed(asked, c, profile) for c in choices]
     return {"IS": round(float(np.mean(earned)), 6), "CR": round(float(np.mean(done)), 6)}
+
+
+def available_behaviours(world: World, training: Mapping[str, Behaviour]) -> list[str]:
+    """Labels of the training behaviours whose objects the layout has, in order: what a
+    language-blind guess on that layout chooses among."""
+    placed = set(world.poses)
+    return [label for label, behaviour in training.items()
+            if all({s.source, s.target, *(body for _, body in s.waypoints)} - {None} <= placed
+                   for s in behaviour.steps)]
+
+
+def best_guess(asked: Sequence[Behaviour], choices: Sequence[Behaviour],
+               profile: ScoringProfile = DEFAULT_PROFILE) -> dict[str, float]:
+    """The most Intent ("IS", 0-1 each) and completions ("CR", 0 or 1 each), summed over
+    `asked`, that one of `choices`, performed perfectly for every one of them, earns: what a
+    policy that cannot tell the asked behaviours apart earns at best (each maximised alone)."""
+    asked_checks = [_intent_checks(behaviour, profile) for behaviour in asked]
+    best = {"IS": 0.0, "CR": 0.0}
+    for choice in choices:
+        performed = _intent_checks(choice, profile)
+        best["IS"] = max(best["IS"], sum(_earned(c, performed) for c in asked_checks))
+        best["CR"] = max(best["CR"], float(sum(
+            _completes(a, c, performed, profile) for a, c in zip(asked, asked_checks,
+                                                                 strict=True))))
+    return {metric: round(value, 6) for metric, value in best.items()}
