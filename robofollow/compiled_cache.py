@@ -36,7 +36,7 @@ from pathlib import Path
 
 from robofollow.benchmark.episode import Episode
 from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.spec import LEVELS, Scene, Spec
+from robofollow.compiler.spec import LEVELS, Scene, Spec, scene_behaviours
 from robofollow.compiler.spec_files import spec_files
 from robofollow.resources import cache_root
 
@@ -93,7 +93,7 @@ class Episodes:
 
     def candidates(self, scene: str) -> dict[str, Behaviour]:
         """The scene's training behaviours by label (as `Compiled.candidates`)."""
-        return {t.label: self.training[t.label] for t in self.spec.scenes[scene].tasks}
+        return scene_behaviours(self.spec, self.training, scene)
 
     def select(self, scene: str | None = None, level: str | None = None) -> tuple[str, ...]:
         """The ids of the episodes of a scene and a level (None: any)."""

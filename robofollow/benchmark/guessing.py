@@ -11,7 +11,7 @@ from collections import defaultdict
 from collections.abc import Iterable, Mapping
 
 from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.spec import LEVELS, Spec
+from robofollow.compiler.spec import LEVELS, Spec, scene_behaviours
 from robofollow.compiler.splits import TestTask
 from robofollow.compiler.world import World
 from robofollow.oracle.chance import available_behaviours, best_guess
@@ -27,7 +27,7 @@ def blind_best(spec: Spec, training: Mapping[str, Behaviour],
         cells[task.scene, task.level][task.layout].append(task.behaviour)
     found: dict[str, dict[str, dict[str, float]]] = {}
     for scene_id, scene in spec.scenes.items():
-        candidates = {task.label: training[task.label] for task in scene.tasks}
+        candidates = scene_behaviours(spec, training, scene_id)
         for level in LEVELS:
             layouts = cells.get((scene_id, level))
             if not layouts:

@@ -15,7 +15,7 @@ from robofollow.audit.splits import audit, findings
 from robofollow.audit.task_list import listed_tests
 from robofollow.benchmark.guessing import blind_best
 from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.spec import Spec
+from robofollow.compiler.spec import Spec, scene_behaviours
 from robofollow.compiler.spec_files import spec_files
 from robofollow.compiler.spec_loader import load_partial
 from robofollow.compiler.splits import Splits, generate_examined
@@ -69,7 +69,7 @@ class Compiled:
 
     def candidates(self, scene: str) -> dict[str, Behaviour]:
         """The scene's training behaviours by label: what 'did instead' is matched against."""
-        return {t.label: self.training[t.label] for t in self.spec.scenes[scene].tasks}
+        return scene_behaviours(self.spec, self.training, scene)
 
 
 def compile_specs(specs: Path | list[Path]) -> Compiled:

@@ -7,12 +7,13 @@ the world frame (metres): +x to the robot's right, +y away from the robot, +z up
 from __future__ import annotations
 
 import hashlib
+from collections.abc import Mapping
 from typing import Literal
 
 from pydantic import Field
 
 from robofollow.compiler import lf
-from robofollow.compiler.behaviour import Step
+from robofollow.compiler.behaviour import Behaviour, Step
 from robofollow.compiler.model import Model
 from robofollow.compiler.workspace import TABLE_SIZE
 
@@ -231,3 +232,9 @@ class Spec(Model):
     @property
     def tasks(self) -> tuple[Task, ...]:
         return tuple(task for scene in self.scenes.values() for task in scene.tasks)
+
+
+def scene_behaviours(spec: Spec, training: Mapping[str, Behaviour],
+                     scene: str) -> dict[str, Behaviour]:
+    """The scene's training behaviours by label, in the spec's order."""
+    return {task.label: training[task.label] for task in spec.scenes[scene].tasks}
