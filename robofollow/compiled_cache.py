@@ -45,9 +45,10 @@ KEEP = 64  # cache files kept (the newest); older ones are removed when one is w
 # the code the compile runs, under robofollow/ (a test checks that these are the modules the
 # cached compile imports, and beside them only the rest of the compiler): a change to it, and
 # only to it, compiles again
-SOURCES = ("benchmark/__init__.py", "benchmark/episode.py", "benchmark/pipeline.py",
-           "benchmark/rounds.py", "compiled_cache.py", "errors.py", "resources.py", "files.py",
-           "compiler", "audit")
+SOURCES = ("benchmark/__init__.py", "benchmark/episode.py", "benchmark/guessing.py",
+           "benchmark/pipeline.py", "benchmark/rounds.py", "compiled_cache.py", "errors.py",
+           "resources.py", "files.py", "oracle/__init__.py", "oracle/chance.py", "compiler",
+           "audit")
 
 
 @dataclass(frozen=True)
