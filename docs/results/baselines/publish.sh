@@ -29,7 +29,7 @@ done
 
 robofollow report $(for kind in $KINDS; do echo "$OUT/$kind"; done) --out "$OUT/full"
 # each rung: A - B
-for rung in text:blind objects-text:text objects-form:objects-text; do
+for rung in text:blind objects-text:text objects-form:objects-text form:text; do
     a=${rung%:*} b=${rung#*:}
     robofollow compare "$OUT/$a" "$OUT/$b" --out "$OUT/ladder/$a-vs-$b" > /dev/null
 done
