@@ -183,7 +183,10 @@ def test_a_wrong_final_orientation_loses_only_the_orientation_stage(asked):
     turned = (behaviour.steps[0].yaw_degrees + 90.0) % 180.0
     result = perform(record, with_steps(behaviour, yaw_degrees=turned))
     assert credits(result)[:2] == full(result)[:2]
-    assert credits(result)[2] == (0.0, 0.0) and "90 deg off" in result.stages[2].reason
+    reason = result.stages[2].reason
+    label = behaviour.steps[0].target
+    assert credits(result)[2] == (0.0, 0.0)
+    assert f"released on {label}, but turned 90 deg off the asked yaw" in reason, reason
     assert result.intent_score == result.execution_score == pytest.approx(0.48)
     assert not result.complete
 

@@ -201,9 +201,9 @@ def _placed(rec: Recording, node: dict, marks: dict, aim: Check, exact: Check,
     aimed = [d for d in found if aim(rec, intent, d.frame) is None]
     if not aimed:
         first = found[0]
-        return Outcome(False, False, first.frame, f"{name} was {_let_go(first)} "
-                       f"{where(rec, rec.index(name), first.frame)}, not {wanted} "
-                       f"({aim(rec, intent, first.frame)})")
+        placed, wrong = where(rec, rec.index(name), first.frame), aim(rec, intent, first.frame)
+        return Outcome(False, False, first.frame, f"{name} was {_let_go(first)} {placed}, " + (
+            f"but {wrong}" if placed == wanted else f"not {wanted} ({wrong})"))
     marks["objective"], marks["rest"] = aimed[0].frame, aimed[0].rest
     problems = []
     for delivery in aimed:
