@@ -448,9 +448,9 @@ def _home_and_still(rec: Recording, arm: int, name: str, done: int, p: dict) -> 
     settled = P.holds_for(away <= p["home_radius"], p["frames"]) & still
     arrived = P.first_true(settled, done)
     if arrived is None:
-        return [f"the {name} arm did not come home and keep still (within "
-                f"{cm(p['home_radius'])} of home, moving less than {cm(p['still_radius'])} "
-                f"over {p['frames']} frames)"]
+        return [(f"the {name} arm did not come home and keep still (within "
+                 f"{cm(p['home_radius'])} of home, moving less than {cm(p['still_radius'])} "
+                 f"over {p['frames']} frames)")]
     problems = []
     if arrived - done > p["deadline_frames"]:
         problems.append(f"the {name} arm came home {arrived - done} frames after finishing "
@@ -488,8 +488,8 @@ def _kept(rec: Recording, body: int, keep: str, arm: int, rest: int | None,
     moved = np.linalg.norm(rec.positions[rest:, body] - rec.positions[rest, body], axis=1)
     if moved.max() > p["stay"]:
         frame = rest + int(np.argmax(moved > p["stay"]))
-        return [f"{name} moved {cm(float(moved.max()))} from where it came to rest (from "
-                f"frame {frame})"]
+        return [(f"{name} moved {cm(float(moved.max()))} from where it came to rest (from "
+                 f"frame {frame})")]
     return []
 
 
