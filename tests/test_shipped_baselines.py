@@ -2,7 +2,8 @@
 for each, 8 round-1 episodes of different scenes and levels, run again by name
 (`eval --policy baseline:NAME --tasks ... --rounds 1`), give the trajectory hashes recorded in
 docs/results/baselines/NAME/scores.csv.gz (the same NumPy build and CPU family: inference runs
-through NumPy's matrix products)."""
+through NumPy's matrix products). So do the two objects kinds' second-seed checkpoints, shipped
+with their runs in docs/results/baselines/KIND-seed1/checkpoint."""
 
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ pytestmark = pytest.mark.slow
 
 RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results" / "baselines"
 FULL = ("text", "blind", "form", "objects-text", "objects-form")
+SECOND_SEED = ("objects-text-seed1", "objects-form-seed1")
 SCENES = ("scene1", "scene2", "scene3", "scene4")
 SAMPLED = 8
 
@@ -37,14 +39,25 @@ def sampled(records: list[dict], offset: int) -> list[dict]:
     return chosen
 
 
-@pytest.mark.parametrize("offset,name", enumerate(FULL))
-def test_a_shipped_baseline_reproduces_its_recorded_episodes(offset, name, tmp_path, capsys):
-    recorded = sampled(load_records(RESULTS / name), offset)
+def reproduces(policy: str, recorded: list[dict], run: Path, capsys) -> None:
+    """Run the recorded episodes' tasks again (round 1) and compare trajectory hashes."""
     assert len(recorded) == SAMPLED and all(r["hashes"]["trajectory"] for r in recorded)
-    run = tmp_path / name
     tasks = ",".join(r["task"] for r in recorded)
-    assert main(["eval", "--policy", f"baseline:{name}", "--tasks", tasks, "--rounds", "1",
+    assert main(["eval", "--policy", policy, "--tasks", tasks, "--rounds", "1",
                  "--workers", "1", "--quiet", "--out", str(run)]) == 0
     capsys.readouterr()
     again = {r["episode"]: r["hashes"]["trajectory"] for r in load_records(run)}
     assert again == {r["episode"]: r["hashes"]["trajectory"] for r in recorded}
+
+
+@pytest.mark.parametrize("offset,name", enumerate(FULL))
+def test_a_shipped_baseline_reproduces_its_recorded_episodes(offset, name, tmp_path, capsys):
+    reproduces(f"baseline:{name}", sampled(load_records(RESULTS / name), offset),
+               tmp_path / name, capsys)
+
+
+@pytest.mark.parametrize("offset,name", enumerate(SECOND_SEED, start=1))
+def test_a_second_seed_checkpoint_reproduces_its_recorded_episodes(offset, name, tmp_path,
+                                                                    capsys):
+    reproduces(str(RESULTS / name / "checkpoint"), sampled(load_records(RESULTS / name), offset),
+               tmp_path / name, capsys)
