@@ -16,8 +16,8 @@ STEPS=${STEPS:-60000}
 OBJECT_STEPS=${OBJECT_STEPS:-120000}
 PARTS=${PARTS:-8}
 mkdir -p "$RUNS/parts"
+source "$(dirname "$0")/steps.sh"
 
-started() { [ -e "$1" ] && echo "--resume" || true; }  # a folder the step already began
 timed() {  # name, command...: append the step's wall time to RUNS/times.log
     local name=$1 start
     shift
@@ -35,14 +35,13 @@ fi
 # over cores, so two one-core runs side by side train faster than one after the other on both
 # (rates measured in docs/datasets-and-training.md, "The five on the whole benchmark").
 steps() { case $1 in objects-*) echo "$OBJECT_STEPS" ;; *) echo "$STEPS" ;; esac; }
-trained() { python -c "import json,sys; d=json.load(open('$RUNS/ckpt-$1/policy.json'));
-sys.exit(d['training']['steps'] < $(steps "$1"))" 2>/dev/null; }
+kind_trained() { trained "$RUNS/ckpt-$1" "$(steps "$1")"; }
 train() {  # core, kinds...: train each kind in turn on that core
     local core=$1 kind ckpt
     shift
     for kind in "$@"; do
         ckpt="$RUNS/ckpt-$kind"
-        trained "$kind" || timed "train-$kind" taskset -c "$core" robofollow train "$DATA" \
+        kind_trained "$kind" || timed "train-$kind" taskset -c "$core" robofollow train "$DATA" \
             --policy "$kind" --out "$ckpt" --steps "$(steps "$kind")" --quiet \
             $(started "$ckpt/policy.json")
     done
@@ -64,7 +63,7 @@ evaluate() {  # core: evaluate shards until none is left
                 part="$RUNS/parts/eval-$kind-$mode-$i"
                 done_run "$part" && continue
                 left=1
-                trained "$kind" || continue
+                kind_trained "$kind" || continue
                 rc=0
                 (
                     flock -n 9 || exit 75  # another lane has this shard

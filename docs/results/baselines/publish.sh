@@ -12,14 +12,13 @@ cd "$(dirname "$0")/../../.."
 RUNS=${RUNS:-runs/full}
 OUT=docs/results/baselines
 KINDS="text blind form objects-text objects-form"
+source docs/results/baselines/steps.sh
 
 for kind in $KINDS; do
-    mkdir -p "robofollow/baselines/$kind"
-    cp "$RUNS/ckpt-$kind/"{policy.json,params.npz,training.jsonl} "robofollow/baselines/$kind/"
+    ship_checkpoint "$RUNS/ckpt-$kind" "robofollow/baselines/$kind"
     for arm in "" controls/empty; do
         [ -d "$RUNS/eval-$kind/$arm" ] || continue
-        mkdir -p "$OUT/$kind/$arm"
-        cp "$RUNS/eval-$kind/$arm/"{run.json,summary.json,scores.csv.gz} "$OUT/$kind/$arm/"
+        ship_run "$RUNS/eval-$kind/$arm" "$OUT/$kind/$arm"
     done
     if [ -d "$OUT/$kind/controls/empty" ]; then
         robofollow report "$OUT/$kind/controls/empty" > /dev/null

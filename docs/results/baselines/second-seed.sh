@@ -10,13 +10,13 @@
 set -euo pipefail
 DATA=${DATA:-data/full-demos}
 RUNS=${RUNS:-runs/seeds}
+STEPS=120000  # as the shipped objects kinds
 mkdir -p "$RUNS"
-started() { [ -e "$1" ] && echo "--resume" || true; }
+source "$(dirname "$0")/steps.sh"
 lane() {  # core, kind: train seed 1, then evaluate it on every test task, 10 rounds
     local core=$1 kind=$2 ckpt="$RUNS/ckpt-$2-seed1" run="$RUNS/eval-$2-seed1"
-    python -c "import json,sys; sys.exit(json.load(open('$ckpt/policy.json'))['training']
-['steps'] < 120000)" 2>/dev/null || taskset -c "$core" robofollow train "$DATA" \
-        --policy "$kind" --seed 1 --steps 120000 --out "$ckpt" --quiet \
+    trained "$ckpt" "$STEPS" || taskset -c "$core" robofollow train "$DATA" \
+        --policy "$kind" --seed 1 --steps "$STEPS" --out "$ckpt" --quiet \
         $(started "$ckpt/policy.json")
     [ -f "$run/summary.json" ] || taskset -c "$core" robofollow eval --policy "$ckpt" \
         --out "$run" --workers 1 --quiet $(started "$run/run.json")
@@ -26,9 +26,8 @@ lane 0 objects-text & lane 1 objects-form & wait
 RUNS=$(realpath "$RUNS")
 cd "$(dirname "$0")"
 for kind in objects-text objects-form; do
-    mkdir -p "$kind-seed1/checkpoint"
-    cp "$RUNS/ckpt-$kind-seed1/"{policy.json,params.npz,training.jsonl} "$kind-seed1/checkpoint/"
-    cp "$RUNS/eval-$kind-seed1/"{run.json,summary.json,scores.csv.gz} "$kind-seed1/"
+    ship_checkpoint "$RUNS/ckpt-$kind-seed1" "$kind-seed1/checkpoint"
+    ship_run "$RUNS/eval-$kind-seed1" "$kind-seed1"
     robofollow report "$kind-seed1" > /dev/null
     robofollow compare "$kind-seed1" "$kind" --out "seeds/$kind-seed1-vs-$kind" > /dev/null
 done
