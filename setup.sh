@@ -1,6 +1,10 @@
 #!/usr/bin/env bash
 # Install RoboFollow (editable, with the test tools) and what headless MuJoCo rendering needs:
 # Mesa's EGL from the Debian/Ubuntu packages below (skipped when already present).
+# The Python packages come at the versions in requirements.lock, the ones the shipped results
+# (docs/results) and CI were made with. ROBOFOLLOW_UNLOCKED=1 ./setup.sh installs without the lock:
+# the newest releases that pyproject.toml's bounds allow. Trajectory hashes reproduce bit for bit
+# only with the locked versions and the same kind of CPU; scores almost always, not always.
 set -euo pipefail
 cd "$(dirname "$0")"
 PACKAGES="libegl1 libegl-mesa0 libgl1-mesa-dri libgbm1"
@@ -20,4 +24,9 @@ else
     echo "note: not a Debian/Ubuntu system; make sure Mesa EGL (or OSMesa, with MUJOCO_GL=osmesa)" \
          "is installed for headless rendering" >&2
 fi
-pip install -e '.[test]'
+if [ "${ROBOFOLLOW_UNLOCKED:-0}" = "1" ]; then
+    echo "ROBOFOLLOW_UNLOCKED=1: installing without requirements.lock"
+    pip install -e '.[test]'
+else
+    pip install -c requirements.lock -e '.[test]'
+fi

@@ -16,6 +16,11 @@ class RoboFollowError(Exception):
         return str(self)
 
 
+class UsageError(RoboFollowError):
+    """A command-line argument that cannot be used as given: exit status 2, as for the
+    arguments argparse itself rejects."""
+
+
 class InstructionError(RoboFollowError):
     """An instruction that cannot be turned into a logical form; `column` is 1-based."""
 

@@ -4,13 +4,14 @@ links, where a byte that is not UTF-8 sits."""
 from __future__ import annotations
 
 import json
+import math
 import os
 import shutil
-from collections.abc import Iterator
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
-from typing import Any
+from typing import Any, BinaryIO
 
 
 def write_json(path: Path, data) -> None:
@@ -62,6 +63,7 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
     partial = path.with_name(path.name + ".partial")
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
+        partial.unlink(missing_ok=True)  # (a link left there is not followed)
         partial.write_bytes(data)
         os.replace(partial, path)
     except BaseException:
@@ -83,9 +85,15 @@ def link_or_copy(source: Path, target: Path) -> None:
         shutil.copyfile(source, target)
 
 
+RECORDED = ("provenance",)  # what a run records beside its options (not an option)
+
+
 def changed_options(previous: dict, current: dict) -> str | None:
-    """Why a run cannot be resumed with `current` options, or None when they are the same."""
-    changed = [key for key, value in current.items() if previous.get(key) != value]
+    """Why a run cannot be resumed with `current` options, or None when they are the same:
+    every option of either side is compared (one that only one side has differs)."""
+    keys = [*current, *(key for key in previous if key not in current)]
+    changed = [key for key in keys
+               if key not in RECORDED and previous.get(key) != current.get(key)]
     if not changed:
         return None
     return (f"was run with other options ({', '.join(changed)} differ); resume with the same "
@@ -135,5 +143,75 @@ def json_lines(data: bytes) -> Iterator[JsonLine]:
         except json.JSONDecodeError as error:
             yield JsonLine(number, raw, problem=f"not JSON ({error.msg} at column "
                                                 f"{error.colno})", column=error.colno)
+        except RecursionError:
+            yield JsonLine(number, raw, problem=f"not JSON ({NESTED})")
         else:
             yield JsonLine(number, raw, value)
+
+
+# -- reading files that may be bad -------------------------------------------------------------
+# Helpers for the validating readers of RoboFollow's files (each names the file itself): they
+# return what is wrong, in words, or raise nothing.
+
+NESTED = "nested too deeply"  # JSON whose arrays and objects nest past the parser's depth
+
+
+def read_at_most(stream: BinaryIO, limit: int) -> bytes | None:
+    """The stream's bytes, or None when it holds more than `limit`: reading stops there, so a
+    small compressed stream (gzip.open) cannot fill the memory."""
+    data = stream.read(limit + 1)
+    return data if len(data) <= limit else None
+
+
+def json_document(data: bytes) -> tuple[Any, str | None]:
+    """(value, None) of a whole JSON document, or (None, what is wrong: "line 3, column 7:
+    not JSON (Expecting value)", "line 1, column 2: not UTF-8 text (byte 0xff)")."""
+    try:
+        return json.loads(data.decode("utf-8")), None
+    except UnicodeDecodeError as error:
+        line, column, _, _ = not_utf8(data, error)
+        return None, (f"line {line}, column {column}: not UTF-8 text "
+                      f"(byte 0x{data[error.start]:02x})")
+    except json.JSONDecodeError as error:
+        return None, f"line {error.lineno}, column {error.colno}: not JSON ({error.msg})"
+    except RecursionError:
+        return None, f"not JSON ({NESTED})"
+
+
+def shown(value, width: int = 40) -> str:
+    """A value as a message quotes it: JSON, on one line, cut to about `width` characters."""
+    try:
+        text = json.dumps(value[:width + 1] if isinstance(value, str) else value,
+                          ensure_ascii=True)
+    except (TypeError, ValueError, RecursionError):
+        text = f"a {type(value).__name__}"
+    return text if len(text) <= width else text[:width] + "…"
+
+
+def number_problem(value, low: float | None = None, high: float | None = None) -> str | None:
+    """What is wrong with a value that must be a finite number (not a bool) from `low` to
+    `high`, or None: 'is "a", not a number', "is nan, not a finite number", "is 500, not a
+    number from 0 to 1"."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return f"is {shown(value)}, not a number"
+    if not math.isfinite(float(value) if abs(value) < 2 ** 1000 else math.inf):
+        return f"is {shown(value)}, not a finite number"
+    if (low is not None and value < low) or (high is not None and value > high):
+        bounds = (f"a number from {low:g} to {high:g}" if low is not None and high is not None
+                  else f"at least {low:g}" if low is not None else f"at most {high:g}")
+        return f"is {value:g}, not {bounds}"
+    return None
+
+
+def key_problem(data: dict, required: Iterable[str], optional: Iterable[str] = ()
+                ) -> tuple[str, str] | None:
+    """The first key an object lacks ("missing", key) or has beyond `required` and `optional`
+    ("unknown", key), or None."""
+    known = {*required, *optional}
+    for key in required:
+        if key not in data:
+            return "missing", key
+    for key in data:
+        if key not in known:
+            return "unknown", key
+    return None

@@ -44,7 +44,7 @@ def test_a_control_arm_must_be_another_instruction_mode(tmp_path, capsys):
                                                  "shuffled?")),
                               ("empty", "the run itself gives empty instructions")):
         assert main(["eval", "--policy", "noop", "--controls", controls, "--instruction-mode",
-                     "empty", "--out", str(tmp_path / "run")]) == 1
+                     "empty", "--out", str(tmp_path / "run")]) == 2
         err = capsys.readouterr().err
         assert message in err and "Traceback" not in err, err
         assert not (tmp_path / "run").exists()

@@ -193,7 +193,7 @@ def test_the_instruction_controls():
 
 def test_eval_rejects_unknown_scenes_and_levels(capsys, tmp_path):
     assert main(["eval", "--policy", "noop", "--out", str(tmp_path / "r"), "--specs",
-                 str(builtin_specs()), "--levels", "L9"]) == 1
+                 str(builtin_specs()), "--levels", "L9"]) == 2
     assert "unknown level L9; known: L0, L1, L2, L3" in capsys.readouterr().err
 
 
@@ -207,7 +207,7 @@ def test_eval_can_be_limited_to_named_tasks(tmp_path, capsys):
     assert sorted(r["task"] for r in read_results(out / "episodes.jsonl")) == [
         "scene2/L0/pickup_left_cube", "scene4/L1/s41_l_pick_red_not_in_bowl@scene4_4"]
     assert main(["eval", "--policy", "noop", "--out", str(tmp_path / "x"), "--specs",
-                 str(builtin_specs()), "--tasks", "scene2/L0/pickup_left_cub"]) == 1
+                 str(builtin_specs()), "--tasks", "scene2/L0/pickup_left_cub"]) == 2
     error = capsys.readouterr().err
     assert "unknown task scene2/L0/pickup_left_cub;" in error
     assert "did you mean scene2/L0/pickup_left_cube" in error
@@ -254,7 +254,7 @@ def test_a_hung_in_process_policy_is_cut_at_its_time_limit_in_the_worker_pool(tm
         ("step 0: the policy did not answer within 1 s", 0)] * 2
     assert json.loads((out / "run.json").read_text())["policy_timeout"] == 1.0
     assert main(["eval", "--policy", "ws://localhost:8000", "--out", str(tmp_path / "ws"),
-                 "--specs", str(builtin_specs()), "--policy-timeout", "5"]) == 1
+                 "--specs", str(builtin_specs()), "--policy-timeout", "5"]) == 2
     assert "a server takes its own: --policy URL?timeout=S&retries=N" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(args[:-1] + ["0"])

@@ -311,7 +311,8 @@ def test_a_disk_that_fills_mid_run_stops_it_with_whole_lines_and_it_resumes(tmp_
 def test_json_lines_are_split_at_newlines_only(tmp_path):
     from robofollow.eval.run_folder import ResultsFile, read_results
 
-    record = {"episode": "e\u2028x", "scene": "scene1", "level": "L0", "task": "t\u2029",
+    record = {"episode": "scene1/L0/t\u2028x\u2029#r1", "scene": "scene1", "level": "L0",
+              "task": "scene1/L0/t\u2028x\u2029",
               "intent_score": 0.0, "execution_score": 0.0, "complete": False}
     with ResultsFile(tmp_path / "episodes.jsonl") as sink:
         sink.append(record)

@@ -681,7 +681,7 @@ def test_eval_sends_privileged_observations_only_with_the_flag_and_records_it(tm
         m["privileged"] == {"scene": "scene2", "layout": episode(EPISODE).layout,
                             "seed": episode(EPISODE).seed} for m in observations)
     assert main(["eval", "--policy", "noop", "--allow-privileged", "--out",
-                 str(tmp_path / "local"), *common]) == 1
+                 str(tmp_path / "local"), *common]) == 2
     assert "for policy servers" in capsys.readouterr().err
 
 

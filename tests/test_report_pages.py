@@ -20,7 +20,10 @@ from robofollow.eval.report_data import report_data
 from robofollow.eval.run_folder import RESULTS, RUN_FILE, SCORES, prepare
 from robofollow.eval.runner import summary
 from robofollow.eval.scores import write_scores
+from robofollow.provenance import environment
 from tests.report_helpers import OPTIONS, fake_record
+
+ENVIRONMENT = environment()
 
 SHIPPED = Path(__file__).resolve().parent.parent / "docs" / "results" / "baselines"
 
@@ -186,9 +189,9 @@ def test_a_misspelt_policy_or_name_leaves_no_folder_and_says_the_right_one(tmp_p
     assert "did you mean 'blind'?" in capsys.readouterr().err
     assert main(["eval", "--policy", "baseline:scene2-txt", "--out", str(out)]) == 1
     assert "did you mean 'scene2-text'?" in capsys.readouterr().err
-    assert main(["eval", "--policy", "blind", "--scenes", "scen2", "--out", str(out)]) == 1
+    assert main(["eval", "--policy", "blind", "--scenes", "scen2", "--out", str(out)]) == 2
     assert "did you mean scene2?" in capsys.readouterr().err
-    assert main(["eval", "--policy", "blind", "--levels", "l5", "--out", str(out)]) == 1
+    assert main(["eval", "--policy", "blind", "--levels", "l5", "--out", str(out)]) == 2
     assert not out.exists()
 
 
@@ -196,17 +199,18 @@ def test_a_run_folder_without_a_finished_episode_is_as_good_as_empty(tmp_path):
     out = tmp_path / "run"
     out.mkdir()
     (out / RUN_FILE).write_text(json.dumps(dict(OPTIONS.to_json(), policy="blnd")))
-    prepare(out, OPTIONS.to_json(), resume=False)  # neither "holds a run" nor "other options"
+    prepare(out, OPTIONS.to_json(), resume=False, environment=ENVIRONMENT)  # as good as empty
     assert json.loads((out / RUN_FILE).read_text())["policy"] == OPTIONS.policy
     (out / RESULTS).write_text(json.dumps(fake_record("a", "L0", 1, 1, True, None)) + "\n")
     with pytest.raises(Exception, match="already holds a run"):
-        prepare(out, OPTIONS.to_json(), resume=False)
+        prepare(out, OPTIONS.to_json(), resume=False, environment=ENVIRONMENT)
     # a shipped run keeps its summary and scores, not its records: it holds a run
     shipped = _folder(tmp_path / "shipped", _records("L0", 2, 1.0, 0.25))
     (shipped / RESULTS).unlink()
     for resume in (False, True):
-        with pytest.raises(Exception, match="already holds a run|other options"):
-            prepare(shipped, dict(OPTIONS.to_json(), policy="noop"), resume=resume)
+        with pytest.raises(Exception, match="already holds a run|keeps only its scores"):
+            prepare(shipped, dict(OPTIONS.to_json(), policy="noop"), resume=resume,
+                    environment=ENVIRONMENT)
 
 
 def test_eval_videos_of_l3_episodes_are_captioned_and_shown_beside_their_cell(tmp_path):

@@ -53,6 +53,6 @@ def test_the_other_run_and_a_shard_are_checked_first(tmp_path, capsys):
                  str(tmp_path / "nowhere"), "--out", str(tmp_path / "run")]) == 1
     assert "no such run folder" in capsys.readouterr().err
     assert main(["eval", "--policy", "expert", *RUN, "--until-separated", str(tmp_path),
-                 "--shard", "1/2", "--out", str(tmp_path / "run")]) == 1
+                 "--shard", "1/2", "--out", str(tmp_path / "run")]) == 2
     assert "a shard is a part of one" in capsys.readouterr().err
     assert not (tmp_path / "run").exists()

@@ -74,6 +74,6 @@ def test_a_merge_that_misses_or_doubles_is_refused_naming_it(runs, tmp_path, cap
 
 
 def test_a_shard_is_checked_before_anything_runs(tmp_path, capsys):
-    assert main(["eval", *RUN, "--shard", "3/2", "--out", str(tmp_path / "run")]) == 1
+    assert main(["eval", *RUN, "--shard", "3/2", "--out", str(tmp_path / "run")]) == 2
     assert "shard '3/2': expected I/N with 1 <= I <= N" in capsys.readouterr().err
     assert not (tmp_path / "run").exists()

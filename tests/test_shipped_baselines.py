@@ -1,9 +1,11 @@
 """The five full-benchmark baselines ship with the package and reproduce their recorded runs:
 for each, 8 round-1 episodes of different scenes and levels, run again by name
-(`eval --policy baseline:NAME --tasks ... --rounds 1`), give the trajectory hashes recorded in
-docs/results/baselines/NAME/scores.csv.gz (the same NumPy build and CPU family: inference runs
-through NumPy's matrix products). So do the two objects kinds' second-seed checkpoints, shipped
-with their runs in docs/results/baselines/KIND-seed1/checkpoint."""
+(`robofollow reproduce RUN --policy baseline:NAME`), give the Intent, Execution and completion
+recorded in docs/results/baselines/NAME/scores.csv.gz on any allowed versions, and the same
+trajectory hashes where the environment matches the recorded one (provenance.ARITHMETIC:
+inference runs through NumPy's matrix products, the physics through MuJoCo). So do the two
+objects kinds' second-seed checkpoints, shipped with their runs in
+docs/results/baselines/KIND-seed1/checkpoint."""
 
 from __future__ import annotations
 
@@ -11,9 +13,10 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.cli import main
 from robofollow.compiler.spec import LEVELS
+from robofollow.eval.reproduce import reproduce
 from robofollow.eval.saved_run import load_records
+from tests.sim_helpers import cached_benchmark
 
 pytestmark = pytest.mark.slow
 
@@ -39,25 +42,22 @@ def sampled(records: list[dict], offset: int) -> list[dict]:
     return chosen
 
 
-def reproduces(policy: str, recorded: list[dict], run: Path, capsys) -> None:
-    """Run the recorded episodes' tasks again (round 1) and compare trajectory hashes."""
-    assert len(recorded) == SAMPLED and all(r["hashes"]["trajectory"] for r in recorded)
-    tasks = ",".join(r["task"] for r in recorded)
-    assert main(["eval", "--policy", policy, "--tasks", tasks, "--rounds", "1",
-                 "--workers", "1", "--quiet", "--out", str(run)]) == 0
-    capsys.readouterr()
-    again = {r["episode"]: r["hashes"]["trajectory"] for r in load_records(run)}
-    assert again == {r["episode"]: r["hashes"]["trajectory"] for r in recorded}
+def reproduces(policy: str, run: Path, recorded: list[dict]) -> None:
+    """Run the recorded episodes again: scores agree, and hashes where the environment
+    matches."""
+    found = reproduce(cached_benchmark(), run, policy=policy,
+                      episodes=[r["episode"] for r in recorded])
+    assert found.hashes_compared == SAMPLED and not found.score_differences, found.text()
+    assert found.agrees, found.text()
 
 
 @pytest.mark.parametrize("offset,name", enumerate(FULL))
-def test_a_shipped_baseline_reproduces_its_recorded_episodes(offset, name, tmp_path, capsys):
-    reproduces(f"baseline:{name}", sampled(load_records(RESULTS / name), offset),
-               tmp_path / name, capsys)
+def test_a_shipped_baseline_reproduces_its_recorded_episodes(offset, name):
+    run = RESULTS / name
+    reproduces(f"baseline:{name}", run, sampled(load_records(run), offset))
 
 
 @pytest.mark.parametrize("offset,name", enumerate(SECOND_SEED, start=1))
-def test_a_second_seed_checkpoint_reproduces_its_recorded_episodes(offset, name, tmp_path,
-                                                                    capsys):
-    reproduces(str(RESULTS / name / "checkpoint"), sampled(load_records(RESULTS / name), offset),
-               tmp_path / name, capsys)
+def test_a_second_seed_checkpoint_reproduces_its_recorded_episodes(offset, name):
+    run = RESULTS / name
+    reproduces(str(run / "checkpoint"), run, sampled(load_records(run), offset))

@@ -34,7 +34,8 @@ def _records(seed: int, shift: float = 0.0) -> list[dict]:
                     records.append({
                         "episode": f"{task_id}#r{round_index}", "scene": scene, "level": level,
                         "task": task_id, "hashes": {"episode": f"h{task}{round_index}"},
-                        "intent_score": score + shift, "execution_score": score / 2 + shift,
+                        "intent_score": min(score + shift, 1.0),
+                        "execution_score": score / 2 + shift,
                         "complete": bool(score > 0.5)})
     return records
 
@@ -126,7 +127,7 @@ def test_compare_needs_episodes_and_says_so(tmp_path, capsys):
     assert main(["compare", str(a), str(empty)]) == 1
     err = capsys.readouterr().err
     assert "holds no evaluation run" in err and "Traceback" not in err
-    assert main(["compare", str(a)]) == 1
+    assert main(["compare", str(a)]) == 2
     assert "compare takes at least two runs" in capsys.readouterr().err
 
 
@@ -159,7 +160,7 @@ def _pilot(tmp_path, name, between, within, tasks=40, rounds=10, seed=0):
     for task in range(tasks):
         mean = 0.5 + rng.normal(0, between)
         for round_index in range(1, rounds + 1):
-            value = float(mean + rng.normal(0, within))
+            value = float(np.clip(mean + rng.normal(0, within), 0, 1))  # (scores' range)
             records.append({"episode": f"scene1/L2/t{task}#r{round_index}", "scene": "scene1",
                             "level": "L2", "task": f"scene1/L2/t{task}",
                             "hashes": {"episode": f"h{task}-{round_index}"},

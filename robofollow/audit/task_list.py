@@ -26,12 +26,13 @@ invalid       an unknown scene, layout or level
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
 
-from pydantic import ValidationError
+from pydantic import ValidationError, create_model
 
 from robofollow.compiler import lf
-from robofollow.compiler.behaviour import Behaviour, describe
+from robofollow.compiler.behaviour import Behaviour, Step, describe
 from robofollow.compiler.model import Model
 from robofollow.compiler.parser import parse
 from robofollow.compiler.spec import LEVELS, Spec
@@ -39,11 +40,13 @@ from robofollow.compiler.spec_files import Sources, spec_error
 from robofollow.compiler.splits import TestTask
 from robofollow.compiler.task_rules import TaskRules
 from robofollow.errors import InstructionError, RoboFollowError, SpecError
-from robofollow.files import json_lines
+from robofollow.files import json_lines, read_at_most
 
 FINDING_KINDS = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "route",
                  "infeasible", "repertoire", "duplicate", "leakage", "level", "wording")
 STEP_FIELDS = ("action", "arm", "source", "relation", "target", "waypoints", "yaw_degrees")
+MAX_TASK_LIST_BYTES = 16 * 1024 * 1024  # a task list: the compiled benchmark's 635 test
+#   tasks, exported with their behaviours (--export-tasks), take about 300 KB
 
 
 class ListedTask(Model):
@@ -126,8 +129,17 @@ class TaskAuditor:
         return fill
 
 
+# An expectation states some of a behaviour's fields: Step's and Behaviour's, each optional
+_ExpectedStep = create_model("_ExpectedStep", __base__=Model, **{
+    name: (field.annotation | None, None) for name, field in Step.model_fields.items()})
+_Expected = create_model("_Expected", __base__=Model, **{
+    name: ((tuple[_ExpectedStep, ...] if name in ("steps", "other") else field.annotation)
+           | None, None) for name, field in Behaviour.model_fields.items()})
+
+
 def _expectation(expect: dict) -> dict:
-    """The expectation, checked: known fields only; waypoints as [mode, body] pairs."""
+    """The expectation, checked: known fields only, each of its type (as Behaviour and Step
+    have them: waypoints as [mode, body] pairs)."""
     unknown = set(expect) - {"steps", "branch", "condition", "other"}
     if unknown:
         raise ValueError(f"unknown fields {', '.join(sorted(unknown))} (known: steps, branch, "
@@ -140,6 +152,11 @@ def _expectation(expect: dict) -> dict:
         if extra:
             raise ValueError(f"unknown step fields {', '.join(sorted(extra))} (known: "
                              f"{', '.join(STEP_FIELDS)})")
+    try:
+        _Expected.model_validate_json(json.dumps(expect), strict=True)
+    except ValidationError as error:
+        first = error.errors()[0]
+        raise ValueError(f"{'.'.join(map(str, first['loc']))}: {first['msg']}") from None
     return expect
 
 
@@ -183,11 +200,16 @@ def _shown(value) -> str:
 
 
 def read_task_list(path) -> list[ListedTask]:
-    """The tasks of a JSON Lines file; a bad line is an error naming file:line."""
+    """The tasks of a JSON Lines file (up to MAX_TASK_LIST_BYTES); a bad line is an error
+    naming file:line and the field."""
     try:
-        data = path.read_bytes()
+        with open(path, "rb") as stream:
+            data = read_at_most(stream, MAX_TASK_LIST_BYTES)
     except OSError as error:
-        raise RoboFollowError(f"cannot read {path}: {error.strerror}") from None
+        raise RoboFollowError(f"cannot read {path}: {error.strerror or error}") from None
+    if data is None:
+        raise RoboFollowError(f"{path}: larger than {MAX_TASK_LIST_BYTES >> 20} MiB; a task "
+                              "list holds one line per task")
     tasks, seen = [], {}
     for line in json_lines(data):
         number = line.number

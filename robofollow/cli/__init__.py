@@ -13,16 +13,24 @@ from robofollow.cli.compile import add_audit, add_compile
 from robofollow.cli.data import add_dataset, add_generate
 from robofollow.cli.eval import add_compare, add_eval, add_merge, add_report
 from robofollow.cli.parse import add_parse
+from robofollow.cli.reproduce import add_reproduce
 from robofollow.cli.serve import add_serve
 from robofollow.cli.sim import add_expert, add_render, add_score
 from robofollow.cli.train import add_train
 from robofollow.cli.vqa import add_vqa
-from robofollow.errors import RoboFollowError
+from robofollow.errors import RoboFollowError, UsageError
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse's parser, whose errors are one line (exit status 2) pointing to --help."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
 def parser() -> argparse.ArgumentParser:
     """The `robofollow` parser: every command, in the order its help lists them."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="robofollow",
         description="RoboFollow: measure whether robot policies really follow language "
                     "instructions.")
@@ -30,7 +38,7 @@ def parser() -> argparse.ArgumentParser:
                         version=f"robofollow {version('robofollow')}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for add in (add_parse, add_compile, add_audit, add_score, add_expert, add_render, add_eval,
-                add_report, add_compare, add_merge,
+                add_report, add_compare, add_merge, add_reproduce,
                 add_serve, add_generate, add_vqa, add_train, add_dataset):
         add(commands)
     return parser
@@ -45,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
         if type(error).render is RoboFollowError.render:  # a plain message: say what it is
             text = f"error: {text}"
         print(text, file=sys.stderr)
-        return 1
+        return 2 if isinstance(error, UsageError) else 1
     except BrokenPipeError:  # output piped into e.g. `head`, which stopped reading
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115  (no flush error at exit)
         return 1

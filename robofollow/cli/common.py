@@ -58,6 +58,21 @@ def seconds(text: str) -> float:
     return value
 
 
+MIN_POINTS = 0.1  # the smallest difference a plan is made for: Table 1 shows one decimal
+
+
+def points(text: str) -> float:
+    """A difference in points (0-100 scores), from MIN_POINTS to 100."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of points, got {text!r}") from None
+    if not MIN_POINTS <= value <= 100:  # (NaN fails too)
+        raise argparse.ArgumentTypeError(f"must be between {MIN_POINTS:g} and 100 points, "
+                                         f"got {text}")
+    return value
+
+
 def image_size(text: str) -> tuple[int, int]:
     """WIDTHxHEIGHT, each within 16..4096."""
     try:

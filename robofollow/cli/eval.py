@@ -11,9 +11,16 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-from robofollow.cli.common import interrupted, positive, seconds, specs_of, specs_option
+from robofollow.cli.common import (
+    interrupted,
+    points,
+    positive,
+    seconds,
+    specs_of,
+    specs_option,
+)
 from robofollow.compiler.spec import LEVELS, MOTION_LEVELS, ROUNDS
-from robofollow.errors import RoboFollowError
+from robofollow.errors import RoboFollowError, UsageError
 from robofollow.eval.deadline import DEFAULT_POLICY_TIMEOUT
 from robofollow.eval.limits import CALL_TIMEOUT_S, MAX_MESSAGE_BYTES
 from robofollow.eval.modes import EXPORTS, INSTRUCTION_MODES, VIDEO_MODES
@@ -114,27 +121,36 @@ def cmd_eval(args) -> int:
     from robofollow.eval.policy_kind import is_server
     from robofollow.eval.report import write_report
     from robofollow.eval.run_folder import check_prepare
-    from robofollow.eval.runner import EvalOptions, evaluate, failures_text, shard_of
+    from robofollow.eval.runner import (
+        EvalOptions,
+        evaluate,
+        failures_text,
+        select_episodes,
+        shard_of,
+    )
     from robofollow.eval.tables import table_text
 
     # what a typo can spoil is checked before the (slow) compile and before any file is
     # written (task ids need the compiled episodes: after the compile, before any file)
     check_policy(args.policy)
     if args.policy_timeout is not None and is_server(args.policy):
-        raise RoboFollowError("--policy-timeout limits in-process policies; a server takes "
-                              "its own: --policy URL?timeout=S&retries=N")
+        raise UsageError("--policy-timeout limits in-process policies; a server takes "
+                         "its own: --policy URL?timeout=S&retries=N")
+    if args.drop_corrupt and not args.resume:
+        raise UsageError("--drop-corrupt repairs a run being resumed: add --resume")
     if args.shard:
         shard_of(args.shard)
         if args.until_separated:
-            raise RoboFollowError("--until-separated decides when a whole run stops; a shard "
-                                  "is a part of one (run it without --shard)")
+            raise UsageError("--until-separated decides when a whole run stops; a shard "
+                             "is a part of one (run it without --shard)")
     controls = _names(args.controls, [m for m in INSTRUCTION_MODES if m != "normal"],
-                      "control arm") if args.controls else []
+                      "control arm") if args.controls is not None else []
     if args.instruction_mode in controls:
-        raise RoboFollowError(f"--controls {args.instruction_mode}: the run itself gives "
-                              f"{args.instruction_mode} instructions; a control arm compares "
-                              "the instructed run with another mode")
-    spec = load_spec(specs_of(args))
+        raise UsageError(f"--controls {args.instruction_mode}: the run itself gives "
+                         f"{args.instruction_mode} instructions; a control arm compares "
+                         "the instructed run with another mode")
+    specs = specs_of(args)
+    spec = load_spec(specs)
     scenes = _names(args.scenes, list(spec.scenes), "scene")
     levels = _names(args.levels, list(LEVELS), "level")
     policy = with_privileged(args.policy) if args.allow_privileged else args.policy
@@ -142,20 +158,20 @@ def cmd_eval(args) -> int:
                           args.instruction_mode, args.video, spec.digest, (),
                           args.sample, args.policy_timeout if args.policy_timeout is not None
                           else None if is_server(args.policy) else DEFAULT_POLICY_TIMEOUT,
-                          args.shard)
+                          args.shard, tuple(controls))
     arms = [(Path(args.out), options)] + [
-        (Path(args.out) / CONTROLS / mode, replace(options, instruction_mode=mode))
-        for mode in controls]
-    if not args.tasks:
+        (Path(args.out) / CONTROLS / mode, options.arm(mode)) for mode in controls]
+    if args.tasks is None:
         for out, arm in arms:
             check_prepare(out, arm.to_json(), args.resume)
-    compiled = load(specs_of(args))
-    if args.tasks:
+    compiled = load(specs)
+    if args.tasks is not None:
         tasks = tuple(_names(args.tasks, list(compiled.task_ids), "task"))
         arms = [(out, replace(arm, tasks=tasks)) for out, arm in arms]
         options = arms[0][1]
         for out, arm in arms:
             check_prepare(out, arm.to_json(), args.resume)
+    select_episodes(compiled, options)  # (a shard count past the episodes is refused)
     try:
         if args.until_separated:
             result, stopped = _until_separated(compiled, options, args)
@@ -196,6 +212,7 @@ def _until_separated(compiled, options, args) -> tuple[dict, int]:
     """Rounds one at a time until the declared test separates the run from the other
     (sequential.py); the summary and the last round run."""
     from robofollow.eval.compare import run_scores
+    from robofollow.eval.run_folder import safe_path
     from robofollow.eval.runner import evaluate
     from robofollow.eval.sequential import SEQUENTIAL, look, record
     from robofollow.files import write_json_atomic
@@ -214,23 +231,29 @@ def _until_separated(compiled, options, args) -> tuple[dict, int]:
               file=sys.stderr)
         if taken.separated:
             break
-    write_json_atomic(out / SEQUENTIAL, record(taken, other, options.rounds))
+    write_json_atomic(safe_path(out, SEQUENTIAL), record(taken, other, options.rounds))
     return result, taken.round
 
 
 def _names(text: str | None, known: list[str], what: str) -> list[str]:
-    """A comma-separated selection of known names, in any case (all of them when empty);
-    a name not known is an error that offers the closest ones."""
+    """A comma-separated selection of known names, in any case (all of them when not
+    given); a blank item, or a name not known, is an error (the latter offers the closest
+    ones)."""
     by_lower = {name.lower(): name for name in known}
-    chosen = [n.strip() for n in (text or "").split(",") if n.strip()]
+    if text is None:
+        return list(known)
+    chosen = [n.strip() for n in text.split(",")]
+    if not all(chosen):
+        raise UsageError(f"{text!r}: a blank {what} in the list; name each {what}, "
+                         "separated by commas")
     unknown = [n for n in chosen if n.lower() not in by_lower]
     if unknown:
         hints = [by_lower[m] for n in unknown
                  for m in difflib.get_close_matches(n.lower(), list(by_lower), n=1)]
         listed = (f"did you mean {', '.join(dict.fromkeys(hints))}?" if hints
                   else f"known: {', '.join(known[:12])}{' …' if len(known) > 12 else ''}")
-        raise RoboFollowError(f"unknown {what} {', '.join(unknown)}; {listed}")
-    picked = {by_lower[n.lower()] for n in chosen} or set(known)
+        raise UsageError(f"unknown {what} {', '.join(unknown)}; {listed}")
+    picked = {by_lower[n.lower()] for n in chosen}
     return [n for n in known if n in picked]
 
 
@@ -265,14 +288,23 @@ def add_report(commands) -> None:
 
 
 def cmd_report(args) -> int:
+    from robofollow.eval.compare import environment_warnings
     from robofollow.eval.report import (
         compare_reports,
         comparison_markdown,
         write_comparison,
         write_report,
     )
+    from robofollow.eval.run_folder import check_folder_out, write_text_file
 
     runs = [Path(run) for run in args.runs]
+    if len(runs) == 1 and args.out:
+        raise UsageError(f"--out is for a comparison of several runs; one run's report is "
+                         f"written in the run itself ({runs[0]}/report.md)")
+    if len(runs) > 1 and args.export:
+        raise UsageError("--export writes one run's Table 1: give one RUN")
+    if args.out and not args.out.endswith(".md"):
+        check_folder_out(Path(args.out))
     motions = [_motions(run, args) for run in runs]
     if len(runs) == 1:
         markdown, html = write_report(runs[0], motions[0])
@@ -280,16 +312,14 @@ def cmd_report(args) -> int:
         for kind in args.export or ():
             print(f"wrote {_export(runs[0], kind)}")
         return 0
-    if args.export:
-        raise RoboFollowError("--export writes one run's Table 1: give one RUN")
     found = compare_reports(runs, motions)
-    for line in found.warnings:
+    for line in [*found.warnings, *environment_warnings(runs)]:
         print(f"warning: {line}", file=sys.stderr)
     if args.out and not args.out.endswith(".md"):
         paths = write_comparison(found, Path(args.out))
         print(f"wrote {', '.join(str(p) for p in paths)}")
     elif args.out:
-        Path(args.out).write_text(comparison_markdown(found), encoding="utf-8")
+        write_text_file(Path(args.out), comparison_markdown(found))
         print(f"wrote {args.out}")
     else:
         print(comparison_markdown(found))
@@ -298,16 +328,16 @@ def cmd_report(args) -> int:
 
 def _export(run: Path, kind: str) -> Path:
     from robofollow.eval.export import table1_csv, table1_latex
+    from robofollow.eval.run_folder import safe_path, write_text_file
     from robofollow.eval.runner import summary
     from robofollow.eval.saved_run import load_run
 
     options, results = load_run(run)
     found = summary(results, options)
-    path = run / EXPORTS[kind]
-    path.write_text(table1_csv(found) if kind == "csv" else table1_latex(
+    path = safe_path(run, EXPORTS[kind])
+    write_text_file(path, table1_csv(found) if kind == "csv" else table1_latex(
         found, f"RoboFollow Table 1: {options.policy}, {found['episodes']} episodes; "
-               "Intent, Execution and Completion (0-100) with 95% intervals over tasks."),
-        encoding="utf-8")
+               "Intent, Execution and Completion (0-100) with 95% intervals over tasks."))
     return path
 
 
@@ -352,11 +382,11 @@ def add_compare(commands) -> None:
                "docs/results/baselines/scene2-blind")
     p.add_argument("runs", nargs="+", metavar="RUN", help="RUN_A RUN_B [RUN_C ...]: each "
                    "later run is compared with the first")
-    p.add_argument("--power", type=float, metavar="DELTA",
+    p.add_argument("--power", type=points, metavar="DELTA",
                    help="plan instead of compare: the rounds per task needed to tell apart a "
                         "difference of DELTA points at each level (80%% power), from one pilot "
                         "run's variance or, better, from two pilot runs' paired differences")
-    p.add_argument("--metric", choices=("IS", "ES", "CR"), default="IS",
+    p.add_argument("--metric", choices=("IS", "ES", "CR"),
                    help="with --power: the metric planned for (default: IS)")
     p.add_argument("--json", action="store_true", help="print the comparison as JSON")
     p.add_argument("--out", metavar="DIR", help="write compare.md, compare.html (with a forest "
@@ -366,29 +396,31 @@ def add_compare(commands) -> None:
 
 
 def cmd_compare(args) -> int:
-    from robofollow.eval.compare import compare_runs, html, markdown
-    from robofollow.files import write_json_atomic
+    from robofollow.eval.compare import (
+        compare_runs,
+        comparison_folders,
+        environment_warnings,
+        markdown,
+        write_comparison_files,
+    )
 
     runs = [Path(run) for run in args.runs]
     if args.power is not None:
         return _plan(runs, args)
+    if args.metric is not None:
+        raise UsageError("--metric chooses the metric --power plans for; a comparison "
+                         "gives every metric")
     if len(runs) < 2:
-        raise RoboFollowError("compare takes at least two runs: RUN_A RUN_B [RUN_C ...] (or "
-                              "one or two pilot runs with --power DELTA)")
+        raise UsageError("compare takes at least two runs: RUN_A RUN_B [RUN_C ...] (or "
+                         "one or two pilot runs with --power DELTA)")
+    folders = comparison_folders(runs[0], runs[1:], Path(args.out)) if args.out else []
     results = [compare_runs(runs[0], other) for other in runs[1:]]
-    for result in results:
-        for warning in result["warnings"]:
-            print(f"warning: {warning}", file=sys.stderr)
-    if args.out:
-        for result in results:
-            out = Path(args.out)
-            if len(results) > 1:
-                out = out / f"{Path(result['a']).name}-vs-{Path(result['b']).name}"
-            out.mkdir(parents=True, exist_ok=True)
-            (out / "compare.md").write_text(markdown(result), encoding="utf-8")
-            (out / "compare.html").write_text(html(result), encoding="utf-8")
-            write_json_atomic(out / "compare.json", result)
-            print(f"wrote {out / 'compare.md'}, compare.html and compare.json", file=sys.stderr)
+    for warning in [w for result in results for w in result["warnings"]] + \
+            environment_warnings(runs):
+        print(f"warning: {warning}", file=sys.stderr)
+    for result, out in zip(results, folders, strict=False):
+        write_comparison_files(result, out)
+        print(f"wrote {out / 'compare.md'}, compare.html and compare.json", file=sys.stderr)
     if args.json:
         print(json.dumps(results[0] if len(results) == 1 else results, indent=2))
     elif not args.out:
@@ -400,14 +432,15 @@ def _plan(runs: list[Path], args) -> int:
     from robofollow.eval.power import plan, plan_markdown
 
     if len(runs) > 2:
-        raise RoboFollowError("--power plans from one pilot run, or two (their paired "
-                              "differences)")
-    if args.power <= 0:
-        raise RoboFollowError(f"--power {args.power:g}: the difference to detect, in points, "
-                              "is positive")
-    entries = plan(runs, args.power, args.metric)
+        raise UsageError("--power plans from one pilot run, or two (their paired "
+                         "differences)")
+    if args.out:
+        raise UsageError("--out writes a comparison's files; --power prints a plan "
+                         "(--json prints it as JSON)")
+    metric = args.metric or "IS"
+    entries = plan(runs, args.power, metric)
     print(json.dumps(entries, indent=2) if args.json else
-          plan_markdown(runs, args.power, args.metric, entries))
+          plan_markdown(runs, args.power, metric, entries))
     return 0
 
 

@@ -2,11 +2,16 @@
 
 from __future__ import annotations
 
+import argparse
+import ipaddress
 import sys
 
 from robofollow.cli.common import positive, seconds, specs_of, specs_option
-from robofollow.errors import RoboFollowError
+from robofollow.errors import RoboFollowError, UsageError
 from robofollow.eval.limits import DEFAULT_HOST, IDLE_TIMEOUT_S, MAX_CLIENTS, MAX_MESSAGE_BYTES
+
+MAX_PORT = 65535
+LOCAL_NAME = "localhost"  # the one host name taken for this machine; others may resolve anywhere
 
 
 def add_serve(commands) -> None:
@@ -23,10 +28,16 @@ def add_serve(commands) -> None:
     p.add_argument("--policy", required=True, help="expert, blind, noop, random, "
                    "baseline:NAME, a checkpoint folder, or module:factory")
     p.add_argument("--host", default=DEFAULT_HOST,
-                   help=f"address to listen on (default: {DEFAULT_HOST}, this machine only; "
-                        "--host 0.0.0.0 exposes the server to every network this machine is "
-                        "on, without authentication: only on a network you trust)")
-    p.add_argument("--port", type=positive, default=8000, help="port (default: 8000)")
+                   help=f"address to listen on (default: {DEFAULT_HOST}, this machine only); "
+                        f"one that is not loopback (127.0.0.0/8, ::1, {LOCAL_NAME}) is refused "
+                        "without --allow-remote")
+    p.add_argument("--allow-remote", action="store_true",
+                   help="let --host be an address that is not loopback: --host 0.0.0.0 "
+                        "exposes the server to every network this machine is on, without "
+                        "authentication (only on a network you trust)")
+    p.add_argument("--port", type=port_number, default=8000,
+                   help=f"port, 0..{MAX_PORT} (default: 8000; 0: any free port, printed once "
+                        "listening)")
     p.add_argument("--max-message", type=positive, metavar="BYTES",
                    help="refuse requests larger than this, closing the connection (default: "
                         f"{MAX_MESSAGE_BYTES}, {MAX_MESSAGE_BYTES // 2 ** 20} MiB; three 320x240 "
@@ -41,7 +52,49 @@ def add_serve(commands) -> None:
     p.set_defaults(handler=cmd_serve)
 
 
+def port_number(text: str) -> int:
+    """A TCP port: a whole number from 0 to MAX_PORT."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a port number, got {text!r}") from None
+    if not 0 <= value <= MAX_PORT:
+        raise argparse.ArgumentTypeError(f"must be from 0 to {MAX_PORT}, got {value}")
+    return value
+
+
+def is_local(host: str) -> bool:
+    """Whether listening on `host` serves this machine only: a loopback address or
+    localhost ('' binds every interface)."""
+    if host.lower() == LOCAL_NAME:
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:  # a host name, or ''
+        return False
+
+
+def check_host(host: str, allow_remote: bool) -> None:
+    """Refuse (UsageError) a host that is not local unless `allow_remote`; with it, warn on
+    stderr that the server is exposed."""
+    if is_local(host):
+        return
+    if not allow_remote:
+        raise UsageError(f"--host {host!r} is not a loopback address (127.0.0.0/8, ::1, "
+                         f"{LOCAL_NAME}): the server has no authentication; add --allow-remote "
+                         "to expose it to the network on purpose")
+    print(f"warning: --host {host!r} exposes the server to the network without "
+          "authentication: anyone who reaches it can drive the policy", file=sys.stderr,
+          flush=True)
+
+
+def url_host(host: str) -> str:
+    """`host` as a URL writes it: an IPv6 address in brackets."""
+    return f"[{host}]" if ":" in host else host
+
+
 def cmd_serve(args) -> int:
+    check_host(args.host, args.allow_remote)  # before anything is loaded
     import logging
 
     from robofollow.compiled_cache import load
@@ -55,9 +108,11 @@ def cmd_serve(args) -> int:
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
     server = server_class(load(specs_of(args)), args.policy, limits)
 
-    def listening(_) -> None:  # only now can a client connect
-        print(f"serving {args.policy} on {scheme}://{args.host}:{args.port} (Ctrl-C stops; "
-              f"health check: http://{args.host}:{args.port}/healthz)", flush=True)
+    def listening(listener) -> None:  # only now can a client connect
+        host, port = listener.getsockname()[:2]  # as bound: the port 0 chose, '' as 0.0.0.0
+        address = f"{url_host(host)}:{port}"
+        print(f"serving {args.policy} on {scheme}://{address} (Ctrl-C stops; "
+              f"health check: http://{address}/healthz)", flush=True)
         if "privileged" in server.pool.uses:
             print(f"note: {args.policy} is a reference policy reading privileged observations: "
                   "only `robofollow eval --allow-privileged` clients can drive it; other "
@@ -68,5 +123,6 @@ def cmd_serve(args) -> int:
     except KeyboardInterrupt:
         pass  # Ctrl-C is how a server is stopped
     except OSError as error:  # e.g. the port is taken, or no such address here
-        raise RoboFollowError(f"cannot listen on {args.host}:{args.port}: {error}") from None
+        raise RoboFollowError(f"cannot listen on {url_host(args.host)}:{args.port}: "
+                              f"{error}") from None
     return 0

@@ -11,6 +11,7 @@ equally, as Table 1's averages do) and the average over every cell.
 
 from __future__ import annotations
 
+import json
 from collections import defaultdict
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -18,12 +19,18 @@ from pathlib import Path
 import numpy as np
 
 from robofollow.compiler.spec import LEVELS
-from robofollow.errors import RoboFollowError
+from robofollow.errors import RoboFollowError, UsageError
 from robofollow.eval.pages import PAGES, p_value, signed_interval
-from robofollow.eval.run_folder import RUN_FILE
-from robofollow.eval.saved_run import RunReadError, load_records
+from robofollow.eval.run_folder import (
+    RUN_FILE,
+    check_folder_out,
+    safe_path,
+    write_text_file,
+)
+from robofollow.eval.saved_run import RunReadError, load_provenance, load_records
 from robofollow.oracle.intervals import holm, paired_test
 from robofollow.oracle.metrics import METRICS
+from robofollow.provenance import differences
 
 ALPHA = 0.05
 FIELDS = {"IS": "intent", "ES": "execution", "CR": "complete"}  # each metric in run_scores
@@ -188,18 +195,43 @@ def _headline(rows: list[dict]) -> list[dict]:
 CONTROLS = "controls"  # RUN/controls/<instruction mode>: a run's control arms
 
 
+def control_arms(run: Path) -> list[str]:
+    """The modes of the run's control arms (RUN/controls/<mode> holding a run), sorted."""
+    folder = run / CONTROLS
+    return sorted(arm.name for arm in folder.iterdir()
+                  if (arm / RUN_FILE).is_file()) if folder.is_dir() else []
+
+
+def environment_warnings(runs: list[Path]) -> list[str]:
+    """For each later run whose recorded environment is not the first run's, the fields in
+    which they differ (provenance.FIELDS): trajectory hashes are comparable only where the
+    arithmetic fields agree; scores are comparable everywhere."""
+    made = [load_provenance(run) for run in runs]
+    warnings = []
+    for run, entries in zip(runs[1:], made[1:], strict=True):
+        if entries == made[0]:
+            continue
+        if not entries or not made[0]:
+            lacking = runs[0] if not made[0] else run
+            warnings.append(f"{lacking} records no environment (made before runs recorded "
+                            f"one): {runs[0].name} and {run.name} may differ in any version")
+            continue
+        found = differences(made[0][0], entries[0]) or ["the environments of resumed parts"]
+        warnings.append(f"{runs[0].name} and {run.name} ran in different environments: "
+                        f"{'; '.join(found)}")
+    return warnings
+
+
 def control_comparisons(run: Path) -> list[dict]:
     """The run against each of its control arms (RUN/controls/<mode>, same episodes with
     other instructions): {"mode", "folder", "pairs", "verdicts", "rows"}; none when it has
     none."""
     found = []
-    folder = run / CONTROLS
-    for arm in sorted(folder.iterdir()) if folder.is_dir() else ():
-        if (arm / RUN_FILE).is_file():
-            result = compare_runs(run, arm, ("instructed", arm.name))
-            found.append({"mode": arm.name, "folder": f"{CONTROLS}/{arm.name}",
-                          "pairs": result["pairing"]["pairs"], "verdicts": result["verdicts"],
-                          "rows": result["rows"], "warnings": result["warnings"]})
+    for mode in control_arms(run):
+        result = compare_runs(run, run / CONTROLS / mode, ("instructed", mode))
+        found.append({"mode": mode, "folder": f"{CONTROLS}/{mode}",
+                      "pairs": result["pairing"]["pairs"], "verdicts": result["verdicts"],
+                      "rows": result["rows"], "warnings": result["warnings"]})
     return found
 
 
@@ -290,3 +322,27 @@ def markdown(result: dict) -> str:
                          f"{signed_interval(cell['interval'])} | {p_value(cell['p'])} | "
                          f"{p_value(cell['p_holm'])} | {n} |")
     return "\n".join(lines) + "\n"
+
+
+def comparison_folders(a: Path, others: list[Path], out: Path) -> list[Path]:
+    """Where each comparison of `others` with `a` is written: `out` for one; else
+    out/<A>-vs-<B>, each B named by as many of its last path parts as tell the runs apart
+    (two comparisons never share a folder)."""
+    if len(others) == 1:
+        return [out]
+    if len({other.resolve() for other in others}) < len(others):
+        raise UsageError("a run is given twice; each run is compared with the first once")
+    names = [other.name for other in others]
+    for depth in range(1, max(len(other.resolve().parts) for other in others) + 1):
+        names = ["-".join(other.resolve().parts[-depth:]) for other in others]
+        if len(set(names)) == len(names):
+            break
+    return [out / f"{a.name}-vs-{name}" for name in names]
+
+
+def write_comparison_files(result: dict, out: Path) -> None:
+    """OUT/compare.md, compare.html and compare.json of one comparison."""
+    check_folder_out(out)
+    for name, text in (("compare.md", markdown(result)), ("compare.html", html(result)),
+                       ("compare.json", json.dumps(result, indent=2) + "\n")):
+        write_text_file(safe_path(out, name), text)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from robofollow.eval.run_folder import safe_path
 from robofollow.oracle.metrics import shown_interval
 
 FIGURES = "figures"  # the folder beside the report
@@ -37,10 +38,10 @@ def _figure(width: float, height: float):
 
 
 def _save(figure, folder: Path, name: str, caption: str) -> dict:
-    out = folder / FIGURES
+    out = safe_path(folder, FIGURES)
     out.mkdir(parents=True, exist_ok=True)
-    figure.savefig(out / f"{name}.svg", metadata={"Date": None})
-    figure.savefig(out / f"{name}.pdf", metadata={"CreationDate": None})
+    for suffix, metadata in (("svg", {"Date": None}), ("pdf", {"CreationDate": None})):
+        figure.savefig(safe_path(folder, FIGURES, f"{name}.{suffix}"), metadata=metadata)
     return {"name": name, "svg": f"{FIGURES}/{name}.svg", "pdf": f"{FIGURES}/{name}.pdf",
             "caption": caption}
 

@@ -9,7 +9,7 @@ import importlib
 import importlib.util
 from urllib.parse import parse_qsl, urlsplit
 
-from robofollow.errors import RoboFollowError, did_you_mean
+from robofollow.errors import RoboFollowError, UsageError, did_you_mean
 from robofollow.eval.policy import OBSERVATION_PARTS, Policy
 from robofollow.eval.policy_kind import SERVER_KINDS, PolicyKind, is_server, policy_kind
 from robofollow.eval.reference import REFERENCE_POLICIES
@@ -129,8 +129,8 @@ def with_privileged(spec: str) -> str:
     """A server's --policy with privileged observations allowed (`?privileged=1`), as
     `robofollow eval --allow-privileged` gives it: the run's options record it."""
     if not is_server(spec):
-        raise PolicyLoadError(f"--allow-privileged is for policy servers (ws:// or tcp://); "
-                              f"{spec!r} runs in this process")
+        raise UsageError(f"--allow-privileged is for policy servers (ws:// or tcp://); "
+                         f"{spec!r} runs in this process")
     address = urlsplit(spec)
     pairs = [(key, value) for key, value in parse_qsl(address.query) if key != "privileged"]
     query = "&".join(f"{key}={value}" for key, value in [*pairs, ("privileged", "1")])

@@ -1,32 +1,51 @@
 """`robofollow merge`: the shards of one run (`eval --shard I/N`, e.g. the tasks of a job
 array) joined into a run like any other. The shards must be the N parts of one run (the same
 options but the shard, the same specs) and hold, together, every episode of the run exactly
-once; otherwise nothing is written and the error names what is missing or doubled."""
+once, and the same control arms; otherwise nothing is written and the error names what is
+missing, doubled or different. The merged run records every environment its shards ran in."""
 
 from __future__ import annotations
 
+import sys
 from collections import Counter
 from dataclasses import replace
 from pathlib import Path
 
 from robofollow.compiled_cache import Episodes
 from robofollow.errors import RoboFollowError
-from robofollow.eval.compare import named
+from robofollow.eval.compare import CONTROLS, control_arms, named
 from robofollow.eval.report import write_report
-from robofollow.eval.run_folder import RESULTS, SCORES, SUMMARY, check_out, prepare, run_lock
-from robofollow.eval.runner import EvalOptions, select_episodes, shard_of, summary, with_motion
-from robofollow.eval.saved_run import load_run
+from robofollow.eval.run_folder import (
+    RESULTS,
+    RUN_FILE,
+    SCORES,
+    SUMMARY,
+    check_out,
+    run_lock,
+    safe_path,
+    write_json,
+)
+from robofollow.eval.runner import (
+    EvalOptions,
+    select_episodes,
+    shard_of,
+    summary,
+    with_motion,
+)
+from robofollow.eval.saved_run import load_provenance, load_run
 from robofollow.eval.scores import write_scores
-from robofollow.files import json_line, write_json_atomic
+from robofollow.files import json_line, json_value, write_bytes_atomic
+from robofollow.provenance import differences
 
 
 class MergeError(RoboFollowError):
     """Shards that do not make one run."""
 
 
-def _whole(shards: list[Path], loaded: list[tuple[EvalOptions, list[dict]]]) -> EvalOptions:
+def _whole(shards: list[Path], loaded: list[tuple[EvalOptions, list[dict]]],
+           episodes: int) -> EvalOptions:
     """The options of the run the shards are parts of, once they are checked to be its N
-    parts."""
+    parts (N at most its `episodes`)."""
     whole = replace(loaded[0][0], shard=None)
     parts = []
     for shard, (options, _) in zip(shards, loaded, strict=True):
@@ -34,10 +53,16 @@ def _whole(shards: list[Path], loaded: list[tuple[EvalOptions, list[dict]]]) -> 
             raise MergeError(f"{shard} is a whole run, not a shard (eval --shard I/N makes one)")
         if replace(options, shard=None) != whole:
             theirs = replace(options, shard=None).to_json()
-            differ = [k for k, v in whole.to_json().items() if theirs.get(k) != v]
+            ours = whole.to_json()
+            differ = [k for k in dict.fromkeys([*ours, *theirs]) if theirs.get(k) != ours.get(k)]
             raise MergeError(f"{shard} was run with other options than {shards[0]} "
                              f"({', '.join(differ)} differ): shards of one run share them")
-        parts.append(shard_of(options.shard))
+        parts.append(shard_of(options.shard, episodes))
+        arms = control_arms(shard)
+        if arms != list(options.controls):
+            raise MergeError(f"{shard} holds the control arms {', '.join(arms) or 'none'} but "
+                             f"was run with {', '.join(options.controls) or 'none'}: its "
+                             "run.json and its controls/ folder disagree")
     counts = {count for _, count in parts}
     if len(counts) != 1:
         raise MergeError(f"the shards split the run in different numbers of parts: "
@@ -53,13 +78,59 @@ def _whole(shards: list[Path], loaded: list[tuple[EvalOptions, list[dict]]]) -> 
     return whole
 
 
+def _provenance(shards: list[Path]) -> list[dict]:
+    """Every environment that ran a shard, once each, in the shards' order; said by name
+    where they differ."""
+    made = list({json_value(entry): entry for shard in shards
+                 for entry in load_provenance(shard)}.values())
+    for entry in made[1:]:
+        print(f"warning: the shards ran in different environments "
+              f"({'; '.join(differences(made[0], entry))}): their trajectory hashes are not "
+              "all comparable with one environment's", file=sys.stderr)
+    return made
+
+
 def merge(benchmark: Episodes, shards: list[Path], out: Path) -> dict:
-    """Join the shards into the run folder `out` (new); returns its summary."""
+    """Join the shards into the run folder `out` (new), and each of their control arms into
+    out/controls/<mode>; returns the run's summary. Everything is checked before anything is
+    written."""
     loaded = [load_run(shard) for shard in shards]
-    options = _whole(shards, loaded)
+    options = _whole(shards, loaded, len(select_episodes(
+        benchmark, replace(loaded[0][0], shard=None))))
     if options.spec_digest != benchmark.spec.digest:
         raise MergeError("the shards were run on other specs than these (--specs chooses the "
                          "run's)")
+    arms = [(out, shards, loaded, options)]
+    for mode in options.controls:
+        arm_shards = [shard / CONTROLS / mode for shard in shards]
+        arm_loaded = [load_run(shard) for shard in arm_shards]
+        arm = _whole(arm_shards, arm_loaded, len(select_episodes(benchmark, options)))
+        if arm != options.arm(mode):
+            raise MergeError(f"{arm_shards[0]} is not the {mode} control arm of the shards' run")
+        arms.append((out / CONTROLS / mode, arm_shards, arm_loaded, arm))
+    joined = [(arm_out, arm_shards, arm_options, *_joined(benchmark, arm_loaded, arm_options,
+                                                          arm_out))
+              for arm_out, arm_shards, arm_loaded, arm_options in arms]
+    for arm_out, *_ in joined:
+        _check_new(arm_out)
+    results = [_write(*arm) for arm in joined]
+    for arm_out, *_ in joined[::-1]:  # (the run's report reads its arms')
+        write_report(arm_out)
+    return results[0]
+
+
+def _check_new(out: Path) -> None:
+    """A merged run goes to a new folder (or an empty one)."""
+    check_out(out)
+    if (out / RUN_FILE).exists():
+        raise MergeError(f"{out} already holds a run; merge writes a new run: choose another "
+                         "--out")
+
+
+def _joined(benchmark: Episodes, loaded: list[tuple[EvalOptions, list[dict]]],
+            options: EvalOptions, out: Path) -> tuple[list[dict], dict[str, str | None]]:
+    """One arm's records from its shards, in the run's episode order, checked to hold every
+    episode once; and each episode's motion."""
     episodes = select_episodes(benchmark, options)
     expected = [e.id for e in episodes]
     records = [record for _, results in loaded for record in results]
@@ -72,15 +143,22 @@ def merge(benchmark: Episodes, shards: list[Path], out: Path) -> dict:
                  (doubled, "in more than one shard"), (foreign, "not of this run"))
                 if found]
     if problems:
-        raise MergeError("cannot merge: " + "; ".join(problems))
+        raise MergeError(f"cannot merge into {out}: " + "; ".join(problems))
     order = {episode: index for index, episode in enumerate(expected)}
     records.sort(key=lambda record: order[record["episode"]])
-    check_out(out)
+    return records, {e.id: e.motion for e in episodes}
+
+
+def _write(out: Path, shards: list[Path], options: EvalOptions, records: list[dict],
+           motions: dict[str, str | None]) -> dict:
+    """One arm's run folder, from its joined records; returns its summary."""
     with run_lock(out):
-        prepare(out, options.to_json(), resume=False)
-        (out / RESULTS).write_text("".join(json_line(r) for r in records), encoding="utf-8")
-        result = summary(with_motion(records, {e.id: e.motion for e in episodes}), options)
-        write_json_atomic(out / SUMMARY, result)
-        write_scores(out / SCORES, records)
-    write_report(out)
+        _check_new(out)
+        write_json(safe_path(out, RUN_FILE), dict(options.to_json(),
+                                                  provenance=_provenance(shards)))
+        write_bytes_atomic(safe_path(out, RESULTS),
+                           "".join(json_line(r) for r in records).encode())
+        result = summary(with_motion(records, motions), options)
+        write_json(safe_path(out, SUMMARY), result)
+        write_scores(safe_path(out, SCORES), records)
     return result

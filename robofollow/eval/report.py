@@ -25,8 +25,15 @@ from robofollow.eval.compare import CompareError, compare_runs, control_comparis
 from robofollow.eval.figures import FiguresUnavailable, comparison_figure, run_figures
 from robofollow.eval.pages import PAGES
 from robofollow.eval.report_data import report_data
+from robofollow.eval.run_folder import check_folder_out, safe_path, write_text_file
 from robofollow.eval.runner import EvalOptions, with_motion
-from robofollow.eval.saved_run import load_options, load_records, load_run, summarised_episodes
+from robofollow.eval.saved_run import (
+    load_options,
+    load_provenance,
+    load_records,
+    load_run,
+    summarised_episodes,
+)
 from robofollow.oracle.metrics import METRICS, MOTIONS, table
 
 PAGES_OF_A_RUN = ("report.md", "report.html", "tasks.html")
@@ -50,15 +57,15 @@ def write_report(run: Path, motions: dict[str, str | None] | None = None,
         raise ReportError(f"{run}: its summary counts {counted} episodes but only "
                           f"{len(results)} are here; the report was left as it is")
     data = report_data(run.name, options, with_motion(results, motions or {}),
-                       control_comparisons(run) if controls is None else controls)
+                       control_comparisons(run) if controls is None else controls,
+                       load_provenance(run))
     try:
         data["figures"], data["figures_missing"] = run_figures(data, run), None
     except FiguresUnavailable as error:
         data["figures"], data["figures_missing"] = [], str(error)
         print(f"{run}: no figures ({error})", file=sys.stderr)
     for name in PAGES_OF_A_RUN:
-        (run / name).write_text(PAGES.get_template(f"{name}.j2").render(**data),
-                                encoding="utf-8")
+        write_text_file(safe_path(run, name), PAGES.get_template(f"{name}.j2").render(**data))
     return run / "report.md", run / "report.html"
 
 
@@ -134,15 +141,15 @@ def comparison_markdown(found: Comparison) -> str:
 
 def write_comparison(found: Comparison, out: Path) -> list[Path]:
     """OUT/comparison.md, OUT/comparison.html and the figure of every run on one axis."""
-    out.mkdir(parents=True, exist_ok=True)
+    check_folder_out(out)
     try:
         figure, missing = comparison_figure(found.runs, found.tables, out), None
     except FiguresUnavailable as error:
         figure, missing = None, str(error)
-    paths = [out / "comparison.md", out / "comparison.html"]
-    paths[0].write_text(comparison_markdown(found), encoding="utf-8")
-    paths[1].write_text(PAGES.get_template("runs.html.j2").render(
+    paths = [safe_path(out, "comparison.md"), safe_path(out, "comparison.html")]
+    write_text_file(paths[0], comparison_markdown(found))
+    write_text_file(paths[1], PAGES.get_template("runs.html.j2").render(
         runs=found.runs, options=found.options, tables=found.tables, warnings=found.warnings,
         rows=side_by_side(found.tables), paired=found.paired, unpaired=found.unpaired,
-        figure=figure, figure_missing=missing, metrics=METRICS), encoding="utf-8")
+        figure=figure, figure_missing=missing, metrics=METRICS))
     return paths

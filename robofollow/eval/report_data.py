@@ -21,6 +21,7 @@ from robofollow.eval.pages import shade
 from robofollow.eval.runner import EvalOptions, summary
 from robofollow.eval.tables import ground_truth
 from robofollow.oracle.metrics import METRICS, MOTIONS, references, scores, shown_interval
+from robofollow.provenance import described
 
 VIDEO_LINK = re.compile(r"videos/[A-Za-z0-9_.#@-]+\.mp4")  # what the runner writes
 TOP = 15  # confusions and failure reasons listed
@@ -228,9 +229,11 @@ def _instructions(results: list[dict], options: EvalOptions) -> dict[str, str]:
 
 
 def report_data(name: str, options: EvalOptions, results: list[dict],
-                controls: list[dict] | None = None) -> dict:
+                controls: list[dict] | None = None, provenance: list[dict] | None = None
+                ) -> dict:
     """Everything the templates show, computed once (`controls`: the run against its
-    control arms, compare.control_comparisons). The same in any record order."""
+    control arms, compare.control_comparisons; `provenance`: the environments that ran it).
+    The same in any record order."""
     results = sorted(results, key=lambda r: r["episode"])
     totals = summary(results, options)
     cells = totals["cells"]
@@ -267,6 +270,7 @@ def report_data(name: str, options: EvalOptions, results: list[dict],
         "errors": Counter(r["error"].split(": ", 1)[-1] for r in results if r.get("error")
                           ).most_common(TOP),
         "clipping": clipping(results),
-        "videos": _videos(results, names)}
+        "videos": _videos(results, names),
+        "made_with": [described(entry) for entry in provenance or ()]}
     data["findings"] = findings(data)
     return data

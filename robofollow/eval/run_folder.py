@@ -13,15 +13,24 @@ from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
-from robofollow.errors import RoboFollowError
-from robofollow.files import changed_options, json_line, json_lines, write_json_atomic
+from robofollow.errors import RoboFollowError, UsageError
+from robofollow.files import (
+    changed_options,
+    json_line,
+    json_lines,
+    write_bytes_atomic,
+    write_json_atomic,
+)
+from robofollow.provenance import differences
 
 RUN_FILE, RESULTS, SUMMARY, LOCK = "run.json", "episodes.jsonl", "summary.json", ".lock"
 SCORES = "scores.csv.gz"  # the compact records a finished run keeps (scores.py)
 DROPPED = RESULTS + ".dropped"  # corrupt lines that --drop-corrupt moved out of RESULTS
 _RECORD_FIELDS = {"episode": str, "scene": str, "level": str, "task": str,
                   "intent_score": (int, float), "execution_score": (int, float),
-                  "complete": bool}  # what the summary reads of every record
+                  "complete": bool}  # what the summary reads of every record; _record_problem
+#   checks them: Intent and Execution from 0 to 1, the episode id's shape (scores.py:
+#   episode_problem) and its task, scene and level those of the record
 
 
 class EvalRunError(RoboFollowError):
@@ -44,8 +53,8 @@ class CorruptResultsError(EvalRunError):
         more = f" (and {len(problems) - 5} more)" if len(problems) > 5 else ""
         count = f"{len(problems)} corrupt line{'s' if len(problems) != 1 else ''}"
         super().__init__(
-            f"{path} has {count}: {shown}{more}. To resume, run the same command with "
-            f"--resume --drop-corrupt: it moves such lines to {path.with_name(DROPPED)} and "
+            f"{path} has {count}: {shown}{more}. `robofollow eval` with the run's options "
+            f"and --resume --drop-corrupt moves such lines to {path.with_name(DROPPED)} and "
             "evaluates again the episodes left without a record")
         self.path, self.problems = path, problems
 
@@ -62,6 +71,21 @@ def _record_problem(record) -> str | None:
             return f"no {key!r}"
         if not isinstance(record[key], kind) or (kind != bool and isinstance(record[key], bool)):
             return f"{key!r} is {json.dumps(record[key])[:40]}"
+    # (imported here: the record's checks are the scores file's, scores.py)
+    from robofollow.eval.scores import episode_problem
+    from robofollow.files import number_problem, shown
+    for key in ("intent_score", "execution_score"):
+        problem = number_problem(record[key], 0.0, 1.0)
+        if problem:
+            return f"{key!r} {problem}"
+    problem = episode_problem(record["episode"])
+    if problem:
+        return f"'episode' {problem}"
+    task = record["episode"].rpartition("#")[0]
+    for key, value in zip(("task", "scene", "level"), (task, *task.split("/")[:2]), strict=True):
+        if record[key] != value:
+            return (f"{key!r} is {shown(record[key])}, but the episode id "
+                    f"{shown(record['episode'])} says {shown(value)}")
     return None
 
 
@@ -106,7 +130,8 @@ def drop_corrupt_lines(path: Path) -> list[dict]:
     records, lines, corrupt = _scan(path)
     if not corrupt:
         return records
-    side, partial_file = path.with_name(DROPPED), path.with_name(path.name + ".partial")
+    side = safe_path(path.parent, DROPPED)
+    partial_file = safe_path(path.parent, path.name + ".partial")
     try:
         with open(side, "ab") as f:
             f.writelines(line + b"\n" for _, line, _ in corrupt)
@@ -131,7 +156,8 @@ class ResultsFile:
     def __init__(self, path: Path):
         self.path = path
         try:
-            self.fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
+            self.fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW,
+                              0o644)
         except OSError as error:
             raise EvalOutputError(f"cannot write {path}: {error.strerror or error}") from None
 
@@ -189,7 +215,7 @@ def run_lock(out: Path) -> Iterator[None]:
     process holds it. flock goes with its process, so a killed run's lock never blocks."""
     try:
         out.mkdir(parents=True, exist_ok=True)
-        fd = os.open(out / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
+        fd = os.open(safe_path(out, LOCK), os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
     except OSError as error:
         raise EvalOutputError(f"cannot write in the run folder {out}: "
                               f"{error.strerror or error}") from None
@@ -229,9 +255,15 @@ def _unstarted(out: Path) -> bool:
             and not (out / SUMMARY).exists() and not (out / SCORES).exists())
 
 
+def finished(out: Path) -> bool:
+    """Whether the folder keeps a finished run's results: its summary and scores."""
+    return (out / SUMMARY).is_file() and (out / SCORES).is_file()
+
+
 def check_prepare(out: Path, options: dict, resume: bool) -> None:
     """Why the run folder cannot take this run (new, or resumed with the same options), said
-    before anything is written."""
+    before anything is written. A run that keeps only its scores (as docs/results' do) is
+    never resumed: its episodes could not be told from new ones."""
     check_out(out)
     run_file = out / RUN_FILE
     if not run_file.is_file() or _unstarted(out):
@@ -243,15 +275,61 @@ def check_prepare(out: Path, options: dict, resume: bool) -> None:
     if not resume:
         raise EvalRunError(f"{out} already holds a run; pass --resume to continue it, or "
                            "choose another folder")
-    problem = changed_options(previous, options)
+    if not (out / RESULTS).is_file():
+        raise EvalRunError(f"{out} holds a finished run that keeps only its scores "
+                           f"({SCORES}, no {RESULTS}); it cannot be resumed or written over: "
+                           "choose another folder")
+    problem = changed_options(previous if isinstance(previous, dict) else {}, options)
     if problem:
         raise EvalRunError(f"{out} {problem}")
 
 
-def prepare(out: Path, options: dict, resume: bool) -> None:
-    """Record a new run's options (a folder with no finished episode counts as new), or check
-    that a resumed run has the same."""
+def prepare(out: Path, options: dict, resume: bool, environment: dict) -> None:
+    """Record a new run's options and the environment that runs it (a folder with no
+    finished episode counts as new), or check that a resumed run has the same options; a
+    resume in another environment is said, naming what differs, and added to the run's
+    provenance."""
     check_prepare(out, options, resume)
-    if (out / RUN_FILE).is_file() and not _unstarted(out):
+    run_file = safe_path(out, RUN_FILE)
+    if not run_file.is_file() or _unstarted(out):
+        write_json(run_file, dict(options, provenance=[environment]))
         return
-    write_json(out / RUN_FILE, options)
+    recorded = json.loads(run_file.read_text(encoding="utf-8"))  # (an object: check_prepare)
+    made = recorded.get("provenance") or []
+    if not (isinstance(made, list) and all(isinstance(entry, dict) for entry in made)):
+        raise EvalRunError(f"{run_file}: provenance is not a list of objects")
+    if environment in made:
+        return
+    if made:
+        print(f"warning: {out} is resumed in another environment than it was started in "
+              f"({'; '.join(differences(made[-1], environment))}): its trajectory hashes "
+              "will not all be comparable with one environment's", file=sys.stderr)
+    write_json(run_file, dict(recorded, provenance=[*made, environment]))
+
+
+def check_folder_out(out: Path) -> None:
+    """An --out folder that cannot hold results (a file, or under one) is a bad argument."""
+    blocking = next((p for p in (out, *out.parents) if p.exists()), None)
+    if blocking is not None and not blocking.is_dir():
+        raise UsageError(f"--out {out}: {blocking} is a file; give a folder")
+
+
+def write_text_file(path: Path, text: str) -> None:
+    """A text file written whole (atomically), or EvalOutputError saying why not."""
+    try:
+        write_bytes_atomic(path, text.encode("utf-8"))
+    except OSError as error:
+        raise EvalOutputError(f"cannot write {path}: {error.strerror or error}") from None
+
+
+def safe_path(out: Path, *parts: str) -> Path:
+    """out/parts, refused where it or a folder on the way below `out` is a symbolic link: no
+    write follows a link out of a run folder (or any --out)."""
+    path = out
+    for part in parts:
+        path = path / part
+        if path.is_symlink():
+            raise EvalOutputError(f"{path} is a symbolic link; RoboFollow writes only inside "
+                                  f"{out} and never through a link: remove it, or choose "
+                                  "another folder")
+    return path

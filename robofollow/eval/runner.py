@@ -27,9 +27,10 @@ from __future__ import annotations
 
 import hashlib
 import re
+import sys
 from collections import Counter
-from collections.abc import Mapping
-from dataclasses import asdict, dataclass
+from collections.abc import Iterator, Mapping
+from dataclasses import asdict, dataclass, replace
 from functools import partial
 from pathlib import Path
 
@@ -38,7 +39,7 @@ from tqdm import tqdm
 
 from robofollow.benchmark.episode import Benchmark, Episode
 from robofollow.compiled_cache import Episodes
-from robofollow.errors import RoboFollowError, error_text
+from robofollow.errors import RoboFollowError, UsageError, error_text
 from robofollow.eval.chance import references
 from robofollow.eval.episode import EpisodeRun, run_episode
 from robofollow.eval.instructions import given_instruction
@@ -57,10 +58,13 @@ from robofollow.eval.run_folder import (
     prepare,
     read_results,
     run_lock,
+    safe_path,
     write_json,
 )
+from robofollow.eval.run_folder import finished as run_finished
 from robofollow.eval.scores import write_scores
 from robofollow.oracle.metrics import table
+from robofollow.provenance import environment
 from robofollow.sim.cameras import side_by_side
 from robofollow.sim.simulation import CONTROL_HZ
 from robofollow.sim.stage import Stage
@@ -86,21 +90,35 @@ class EvalOptions:
     sample: int | None = None  # keep this many tasks per scene and level, evenly spread
     policy_timeout: float | None = None  # seconds an in-process policy call may take
     shard: str | None = None  # "I/N": the I-th of N round-robin parts of the episodes
+    controls: tuple[str, ...] = ()  # the control arms run after it (RUN/controls/<mode>)
 
     def to_json(self) -> dict:
         data = dict(asdict(self), scenes=list(self.scenes), levels=list(self.levels),
-                    tasks=list(self.tasks))
-        if self.shard is None:
-            del data["shard"]  # (runs made before shards had no such option)
+                    tasks=list(self.tasks), controls=list(self.controls))
+        for key, unset in (("shard", None), ("controls", [])):
+            if data[key] == unset:
+                del data[key]  # (runs made before the option have no such key)
         return data
 
+    def arm(self, mode: str) -> EvalOptions:
+        """The options of its control arm with `mode` instructions."""
+        return replace(self, instruction_mode=mode, controls=())
 
-def shard_of(text: str) -> tuple[int, int]:
-    """'I/N' -> (I, N), 1 <= I <= N."""
-    index, _, count = text.partition("/")
-    if not (index.isdigit() and count.isdigit()) or not 1 <= int(index) <= int(count):
-        raise RoboFollowError(f"shard {text!r}: expected I/N with 1 <= I <= N, e.g. 1/4")
-    return int(index), int(count)
+
+_SHARD = re.compile(r"([0-9]{1,9})/([0-9]{1,9})")
+
+
+def shard_of(text: str, episodes: int | None = None) -> tuple[int, int]:
+    """'I/N' -> (I, N), 1 <= I <= N (and N at most the run's `episodes`, where given: every
+    shard holds at least one)."""
+    found = _SHARD.fullmatch(text)
+    index, count = (int(found[1]), int(found[2])) if found else (0, 0)
+    if not 1 <= index <= count:
+        raise UsageError(f"shard {text!r}: expected I/N with 1 <= I <= N, e.g. 1/4")
+    if episodes is not None and count > episodes:
+        raise UsageError(f"shard {text}: the run has {episodes} episode"
+                         f"{'s' if episodes != 1 else ''}, so at most {episodes} shards")
+    return index, count
 
 
 def select_episodes(benchmark: Episodes, options: EvalOptions) -> list[Episode]:
@@ -122,7 +140,7 @@ def select_episodes(benchmark: Episodes, options: EvalOptions) -> list[Episode]:
             kept.update(tasks[int(i * step)] for i in range(min(options.sample, len(tasks))))
         chosen = [e for e in chosen if e.task in kept]
     if options.shard:
-        index, count = shard_of(options.shard)
+        index, count = shard_of(options.shard, len(chosen))
         chosen = chosen[index - 1::count]
     return chosen
 
@@ -214,7 +232,7 @@ class Evaluator:
         record = episode_record(self.compiled, episode, instruction, run)
         if frames and (self.options.video == "all" or not run.score.complete):
             name = episode.id.replace("/", "__").replace("#", "_") + ".mp4"
-            path = self.out / "videos" / name
+            path = safe_path(self.out, "videos", name)
             try:
                 path.parent.mkdir(exist_ok=True)
                 write_video(path, frames, CONTROL_HZ)
@@ -262,6 +280,11 @@ class _LostEpisodes:
     def close(self) -> None:
         if self.stage is not None:
             self.stage.close()
+
+
+def _baseline(spec: str) -> bool:
+    """Whether a policy is a trained baseline (whose JAX version the provenance names)."""
+    return policy_kind(spec) in ("baseline", "checkpoint")
 
 
 def _isolated(spec: str) -> bool:
@@ -316,6 +339,25 @@ def failures_text(result: dict) -> str | None:
     return "\n".join(lines)
 
 
+def episode_records(compiled: Episodes, options: EvalOptions, out: Path,
+                    episodes: list[Episode], workers: int = 1, executor: str = "process",
+                    isolate: bool | None = None) -> Iterator[dict]:
+    """Each episode's record, in the order they finish (`out`: where videos go); `isolate`:
+    run the policy in worker processes even with one worker (default: for policies that are
+    not RoboFollow's own)."""
+    isolate = _isolated(options.policy) if isolate is None else isolate
+    lost = _LostEpisodes(compiled, options)
+    make = partial(Evaluator, compiled, options, out)
+    try:
+        yield from results(make, episodes, workers, executor, lost, isolate)
+    except WorkerStartError as error:
+        if error.reported:
+            raise
+        raise EvalPolicyError(f"--policy {options.policy!r}: {error}") from None
+    finally:
+        lost.close()
+
+
 def evaluate(compiled: Episodes, out: Path, options: EvalOptions, workers: int = 1,
              resume: bool = False, progress: bool = True, executor: str = "process",
              drop_corrupt: bool = False, isolate: bool | None = None,
@@ -329,32 +371,26 @@ def evaluate(compiled: Episodes, out: Path, options: EvalOptions, workers: int =
         raise EvalRunError("the options' spec digest is not the compiled specs' digest")
     check_out(out)
     with run_lock(out):
-        prepare(out, options.to_json(), resume)
+        prepare(out, options.to_json(), resume, environment(_baseline(options.policy)))
         episodes = [e for e in select_episodes(compiled, options)
                     if up_to_round is None or e.round <= up_to_round]
-        results_path = out / RESULTS
+        results_path = safe_path(out, RESULTS)
         finished = (drop_corrupt_lines if drop_corrupt else read_results)(results_path)
         done = {r["episode"] for r in finished}
         todo = [e for e in episodes if e.id not in done]
-        isolate = _isolated(options.policy) if isolate is None else isolate
-        lost = _LostEpisodes(compiled, options)
+        if not todo and run_finished(out):  # a finished run is read, never written again
+            print(f"{out}: every episode is already recorded; nothing to run", file=sys.stderr)
+            return summary(with_motion(finished, {e.id: e.motion for e in episodes}), options)
         bar = tqdm(total=len(episodes), initial=len(episodes) - len(todo), desc="evaluating",
                    unit="episode", disable=not progress, smoothing=0.1)
         with bar, ResultsFile(results_path) as sink:
-            make = partial(Evaluator, compiled, options, out)
-            try:
-                for record in results(make, todo, workers, executor, lost, isolate):
-                    sink.append(record)  # one whole line, or none
-                    finished.append(record)
-                    bar.update()
-            except WorkerStartError as error:
-                if error.reported:
-                    raise
-                raise EvalPolicyError(f"--policy {options.policy!r}: {error}") from None
-            finally:
-                lost.close()
+            for record in episode_records(compiled, options, out, todo, workers, executor,
+                                          isolate):
+                sink.append(record)  # one whole line, or none
+                finished.append(record)
+                bar.update()
         finished = with_motion(finished, {e.id: e.motion for e in episodes})
         result = summary(finished, options)
-        write_json(out / SUMMARY, result)
-        write_scores(out / SCORES, finished)
+        write_json(safe_path(out, SUMMARY), result)
+        write_scores(safe_path(out, SCORES), finished)
     return result

@@ -13,7 +13,7 @@ A policy is reset when a connection takes it, when a RoboFollow client says an e
 and when an observation's "step" is 0 after the policy has acted (openpi's clients send no
 episode boundary: they may send "step", or open a connection per episode). Observations are
 checked against the layout the server declares in its metadata (`observation_layout`) and
-refused with an error reply that says what was expected."""
+refused with an error reply that says what was expected; so are NaN and infinite numbers."""
 
 from __future__ import annotations
 
@@ -113,7 +113,17 @@ def _checked_objects(objects, spec: str) -> np.ndarray:
             and objects.shape == SHAPE):
         raise RequestError(f"'objects' must be float32 {list(SHAPE)} (one row per body: "
                            f"{', '.join(FIELDS)}); got {_shape_text(objects)}")
-    return objects
+    return _finite(objects, "'objects'")
+
+
+def _finite(values: np.ndarray, name: str) -> np.ndarray:
+    """`values` (float32), refused where one is NaN or infinite (a number beyond float32's
+    range included: the cast made it infinite)."""
+    bad = np.argwhere(~np.isfinite(values))
+    if len(bad):
+        raise RequestError(f"{name} must be finite numbers; got {values[tuple(bad[0])]} at "
+                           f"{bad[0].tolist()}")
+    return values
 
 
 class ServedPolicy:
@@ -212,7 +222,8 @@ def _checked_state(state) -> np.ndarray:
     if state.shape != (ACTION_WIDTH,):
         raise RequestError(f"'state' must be {ACTION_WIDTH} numbers (shape [{ACTION_WIDTH}], "
                            f"no batch axis), got shape {list(state.shape)}")
-    return state.astype(np.float32)
+    with np.errstate(over="ignore"):  # a number beyond float32's range: infinite, refused
+        return _finite(state.astype(np.float32), "'state'")
 
 
 class PolicyPool:

@@ -162,6 +162,7 @@ class TcpPolicyServer:
                 session.close()
 
     def serve_forever(self, host: str = DEFAULT_HOST, port: int = 0, ready=None) -> None:
+        """Serve until `shutdown()`; `ready(listening socket)` once clients can connect."""
         with socket.create_server((host, port)) as listener:
             listener.settimeout(0.5)  # to notice shutdown()
             if ready is not None:

@@ -102,12 +102,13 @@ class PolicyServer:
             pass
 
     def serve_forever(self, host: str = DEFAULT_HOST, port: int = 0, ready=None) -> None:
+        """Serve until `shutdown()`; `ready(listening socket)` once clients can connect."""
         with serve(self.handle, host, port, compression=None, max_size=self.limits.max_message,
                    open_timeout=min(10.0, self.limits.idle_timeout),
                    process_request=_health) as server:
             self.server = server
             if ready is not None:
-                ready(server)
+                ready(server.socket)
             server.serve_forever()
 
     def shutdown(self) -> None:

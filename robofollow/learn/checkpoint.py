@@ -16,14 +16,26 @@ from __future__ import annotations
 
 import json
 import os
-from dataclasses import dataclass
+import zipfile
+import zlib
+from dataclasses import MISSING, dataclass, fields
 from pathlib import Path
 
 import numpy as np
+from pydantic import TypeAdapter, ValidationError
 
-from robofollow.errors import RoboFollowError
-from robofollow.files import write_json_atomic
-from robofollow.learn.model import Architecture
+from robofollow.errors import RoboFollowError, did_you_mean, error_text
+from robofollow.files import (
+    json_document,
+    key_problem,
+    number_problem,
+    read_at_most,
+    shown,
+    write_json_atomic,
+)
+from robofollow.learn.model import ACTION_WIDTH, OBJECT_FIELDS, Architecture, init
+from robofollow.learn.options import KINDS
+from robofollow.learn.tokens import MAX_TOKENS
 
 FORMAT = "robofollow-baseline/1"
 PREFIX = "baseline:"  # --policy baseline:NAME names a shipped checkpoint
@@ -61,29 +73,211 @@ def save(folder: Path, checkpoint: Checkpoint, optimizer: dict[str, np.ndarray] 
     write_json_atomic(folder / "policy.json", checkpoint.meta())
 
 
+# -- reading a checkpoint back, checked: a bad file is a CheckpointError naming it and the field
+
+META_KEYS = ("format", "architecture", "vocab", "normalization", "execute", "training")
+MAX_POLICY_BYTES = 16 * 1024 * 1024  # policy.json: the shipped ones are under 5 KB
+MAX_PARAMETERS = 64 * 1024 * 1024  # values the architecture may ask of params.npz (256 MB as
+#   float32); the shipped baselines hold under 0.9 M (hidden 512, embed 64)
+NORMALIZED = {"state": ACTION_WIDTH, "action": ACTION_WIDTH, "objects": OBJECT_FIELDS}
+_ARCHITECTURE = TypeAdapter(Architecture)
+_ARCH_FIELDS = fields(Architecture)
+
+
 def load(folder: Path) -> Checkpoint:
+    """The checkpoint in `folder`, every part checked against policy.json's architecture."""
+    path = folder / "policy.json"
+    meta = _policy(path)
+    arch = _architecture(path, meta["architecture"])
+    vocab = _vocab(path, meta["vocab"], arch)
+    normalization = _normalization(path, meta["normalization"], arch)
+    execute = meta["execute"]
+    if isinstance(execute, bool) or not isinstance(execute, int) or not 1 <= execute <= arch.chunk:
+        raise CheckpointError(f"{path}: execute is {shown(execute)}, not a whole number from 1 "
+                              f"to the chunk ({arch.chunk})")
+    if not isinstance(meta["training"], dict):
+        raise CheckpointError(f"{path}: training is {shown(meta['training'])}, not an object")
+    params = _params(folder / "params.npz", {name: array.shape for name, array in
+                                             init(arch, 0).items()})
+    return Checkpoint(arch, vocab, normalization, execute, params, meta["training"])
+
+
+def _policy(path: Path) -> dict:
+    """policy.json: a JSON object with META_KEYS, in FORMAT."""
     try:
-        meta = json.loads((folder / "policy.json").read_text())
-        if meta.get("format") != FORMAT:
-            raise CheckpointError(f"{folder}/policy.json: format {meta.get('format')!r}, "
-                                  f"expected {FORMAT!r}")
-        with np.load(folder / "params.npz") as data:
-            params = {key: data[key] for key in data.files}
-        return Checkpoint(Architecture.from_dict(meta["architecture"]), meta["vocab"],
-                          {k: np.asarray(v, np.float32) for k, v in meta["normalization"]
-                           .items()}, meta["execute"], params,
-                          meta["training"])
-    except (OSError, ValueError, KeyError, TypeError) as error:
-        raise CheckpointError(f"{folder}: not a readable baseline checkpoint "
-                              f"({type(error).__name__}: {error})") from None
+        with open(path, "rb") as stream:
+            data = read_at_most(stream, MAX_POLICY_BYTES)
+    except OSError as error:
+        raise CheckpointError(f"{path}: not a readable baseline checkpoint "
+                              f"({error.strerror or error})") from None
+    if data is None:
+        raise CheckpointError(f"{path}: larger than {MAX_POLICY_BYTES >> 20} MiB; not a "
+                              "checkpoint's policy.json")
+    meta, problem = json_document(data)
+    if problem:
+        raise CheckpointError(f"{path}: {problem}")
+    if not isinstance(meta, dict):
+        raise CheckpointError(f"{path}: {shown(meta)} is not a JSON object")
+    if "format" in meta and meta["format"] != FORMAT:
+        raise CheckpointError(f"{path}: format {meta['format']!r}, expected {FORMAT!r}")
+    _keys(path, meta, META_KEYS)
+    return meta
+
+
+def _keys(path: Path, data: dict, required, optional=(), where: str = "") -> None:
+    found = key_problem(data, required, optional)
+    if found is not None:
+        kind, key = found
+        if kind == "missing":
+            raise CheckpointError(f"{path}: {where}no {shown(key)}")
+        hint = did_you_mean(key, (*required, *optional))
+        raise CheckpointError(f"{path}: {where}unknown key {shown(key)}"
+                              f"{'; ' + hint if hint else ''}")
+
+
+def _architecture(path: Path, data) -> Architecture:
+    """The architecture: Architecture's fields of their types, in range, and a network of at
+    most MAX_PARAMETERS values."""
+    if not isinstance(data, dict):
+        raise CheckpointError(f"{path}: architecture is {shown(data)}, not an object")
+    _keys(path, data, [f.name for f in _ARCH_FIELDS if f.default is MISSING],
+          [f.name for f in _ARCH_FIELDS if f.default is not MISSING], "architecture: ")
+    try:
+        arch = _ARCHITECTURE.validate_json(json.dumps(data), strict=True)
+    except ValidationError as error:
+        first = error.errors()[0]
+        where = ".".join(map(str, first["loc"]))
+        raise CheckpointError(f"{path}: architecture.{where} is {shown(first['input'])}: "
+                              f"{first['msg'][:1].lower() + first['msg'][1:]}") from None
+    problem = _architecture_problem(arch)
+    if problem:
+        raise CheckpointError(f"{path}: architecture.{problem}")
+    if _parameters_at_most(arch) > MAX_PARAMETERS:
+        raise CheckpointError(f"{path}: architecture describes a network of up to "
+                              f"{_parameters_at_most(arch):,} parameters, over the "
+                              f"{MAX_PARAMETERS:,} a checkpoint may have")
+    return arch
+
+
+def _architecture_problem(arch: Architecture) -> str | None:
+    if arch.kind not in KINDS:
+        return f"kind is {shown(arch.kind)}, not one of {', '.join(KINDS)}"
+    for index, camera in enumerate(arch.cameras):
+        if not camera or camera in arch.cameras[:index]:
+            return f"cameras[{index}] is {shown(camera)}: empty, or named twice"
+    if not arch.channels:
+        return "channels is empty: the network has no layer"
+    for field in ("kernels", "strides"):
+        if len(getattr(arch, field)) != len(arch.channels):
+            return (f"{field} has {len(getattr(arch, field))} layers, but channels has "
+                    f"{len(arch.channels)}")
+    wholes = {"vocab_size": [arch.vocab_size], "chunk": [arch.chunk], "embed": [arch.embed],
+              "hidden": [arch.hidden], "channels": arch.channels, "kernels": arch.kernels,
+              "strides": arch.strides, "image_shape": arch.image_shape if arch.cameras else ()}
+    for field, values in wholes.items():
+        for value in values:
+            if value < 1:
+                return f"{field} holds {value}, not a whole number from 1"
+    return None
+
+
+def _parameters_at_most(arch: Architecture) -> int:
+    """At least as many values as init(arch) draws (every layer at the widest and largest
+    kernel): a bound checked before the parameters are made."""
+    width, kernel, d, hidden = max(arch.channels), max(arch.kernels), arch.embed, arch.hidden
+    cameras = len(arch.cameras)
+    convolutions = cameras * len(arch.channels) * (kernel * kernel * max(width, 3) + 1) * width
+    film = cameras * (d + 1) * 2 * width
+    objects = (OBJECT_FIELDS + 7 * d + 7) * d
+    tokens = (arch.vocab_size + MAX_TOKENS + 8 * d + 8) * d
+    trunk = (cameras * 3 * width + 3 * d + 2 * ACTION_WIDTH + 2 * hidden + 3
+             + arch.chunk * ACTION_WIDTH) * hidden
+    return convolutions + film + objects + tokens + trunk + arch.chunk * ACTION_WIDTH
+
+
+def _vocab(path: Path, vocab, arch: Architecture) -> list[str]:
+    if not (isinstance(vocab, list) and all(isinstance(word, str) for word in vocab)):
+        raise CheckpointError(f"{path}: vocab is {shown(vocab)}, not a list of words")
+    if len(vocab) != arch.vocab_size:
+        raise CheckpointError(f"{path}: vocab holds {len(vocab)} words, but "
+                              f"architecture.vocab_size is {arch.vocab_size}")
+    return vocab
+
+
+def _normalization(path: Path, data, arch: Architecture) -> dict[str, np.ndarray]:
+    """Each normalised part's mean and standard deviation: finite, the deviations above 0, as
+    many as the part has values."""
+    if not isinstance(data, dict):
+        raise CheckpointError(f"{path}: normalization is {shown(data)}, not an object")
+    parts = [part for part in NORMALIZED if part != "objects" or arch.reads_objects]
+    _keys(path, data, [f"{part}_{what}" for part in parts for what in ("mean", "std")],
+          where="normalization: ")
+    found = {}
+    for key, values in data.items():
+        width = NORMALIZED[key.rsplit("_", 1)[0]]
+        if not isinstance(values, list) or len(values) != width:
+            raise CheckpointError(f"{path}: normalization.{key} is {shown(values)}, not a list "
+                                  f"of {width} numbers")
+        for index, value in enumerate(values):
+            problem = number_problem(value, 0.0 if key.endswith("_std") else None)
+            if problem or (key.endswith("_std") and value == 0):
+                raise CheckpointError(f"{path}: normalization.{key}[{index}] "
+                                      f"{problem or 'is 0, not above 0'}")
+        found[key] = np.asarray(values, np.float32)
+    return found
+
+
+def _params(path: Path, shapes: dict[str, tuple[int, ...]]) -> dict[str, np.ndarray]:
+    """params.npz: exactly the arrays the architecture has (`shapes`), each of its shape, of
+    finite floats; each array's header is checked before its data is read."""
+    try:
+        with zipfile.ZipFile(path) as archive:
+            stored = {info.filename.removesuffix(".npy"): info.filename
+                      for info in archive.infolist()}
+            found = key_problem(stored, shapes)
+            if found:
+                kind, name = found
+                raise CheckpointError(f"{path}: {'lacks' if kind == 'missing' else 'holds'} "
+                                      f"the array {shown(name)}, which the architecture "
+                                      f"{'has' if kind == 'missing' else 'has not'}")
+            return {name: _array(path, archive, stored[name], shapes[name]) for name in shapes}
+    except (OSError, EOFError, ValueError, zipfile.BadZipFile, zlib.error, RuntimeError,
+            NotImplementedError) as error:
+        raise CheckpointError(f"{path}: not a readable baseline checkpoint "
+                              f"({error_text(error)})") from None
+
+
+def _array(path: Path, archive: zipfile.ZipFile, member: str, shape: tuple[int, ...]
+           ) -> np.ndarray:
+    name = member.removesuffix(".npy")
+    with archive.open(member) as stream:
+        version = np.lib.format.read_magic(stream)
+        if version not in ((1, 0), (2, 0)):
+            raise ValueError(f"{name}: a .npy file of version {version}")
+        read_header = (np.lib.format.read_array_header_1_0 if version == (1, 0) else
+                       np.lib.format.read_array_header_2_0)
+        stored, _, dtype = read_header(stream)
+    if stored != shape:
+        raise CheckpointError(f"{path}: {name} has the shape {stored}, but the architecture "
+                              f"needs {shape}")
+    if dtype.kind != "f":
+        raise CheckpointError(f"{path}: {name} holds {dtype}, not floats")
+    with archive.open(member) as stream:
+        array = np.lib.format.read_array(stream, allow_pickle=False)
+    if not np.isfinite(array).all():
+        raise CheckpointError(f"{path}: {name} holds values that are not finite (NaN or "
+                              "infinite)")
+    return array
 
 
 def load_optimizer(folder: Path) -> dict[str, np.ndarray]:
     try:
-        with np.load(folder / "optimizer.npz") as data:
+        with np.load(folder / "optimizer.npz", allow_pickle=False) as data:
             return {key: data[key] for key in data.files}
-    except (OSError, ValueError) as error:
-        raise CheckpointError(f"{folder}/optimizer.npz: cannot resume ({error})") from None
+    except (OSError, EOFError, ValueError, zipfile.BadZipFile, zlib.error, RuntimeError,
+            NotImplementedError) as error:
+        raise CheckpointError(f"{folder}/optimizer.npz: cannot resume "
+                              f"({error_text(error)})") from None
 
 
 def _atomic(path: Path, write) -> None:

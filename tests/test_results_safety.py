@@ -1,0 +1,148 @@
+"""Nothing lost, nothing corrupted: a finished run is never resumed into or written over, no
+write follows a link out of a run folder or --out, resume and merge compare every option both
+ways (shards and control arms included), two results never land on one path, and shard
+counts are bounded by the episodes."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from robofollow.cli import main
+
+pytestmark = pytest.mark.slow
+
+RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
+RUN = ["--policy", "noop", "--scenes", "scene2", "--levels", "L0", "--sample", "2",
+       "--rounds", "1", "--workers", "1", "--quiet"]
+
+
+def _files(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file() and p.name != ".lock"}
+
+
+@pytest.fixture(scope="module")
+def finished(tmp_path_factory):
+    """A small finished run with its full records."""
+    out = tmp_path_factory.mktemp("finished") / "run"
+    assert main(["eval", *RUN, "--out", str(out)]) == 0
+    return out
+
+
+def test_a_shipped_run_is_never_resumed(tmp_path, capsys):
+    run = tmp_path / "noop"
+    shutil.copytree(RESULTS / "noop", run)
+    before = _files(run)
+    assert main(["eval", "--policy", "noop", "--out", str(run), "--resume", "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "holds a finished run that keeps only its scores" in err and "Traceback" not in err
+    assert _files(run) == before
+
+
+def test_a_finished_run_resumed_is_read_not_written(finished, tmp_path, capsys):
+    run = tmp_path / "run"
+    shutil.copytree(finished, run)
+    kept = {name: _files(run)[name] for name in ("episodes.jsonl", "summary.json",
+                                                 "scores.csv.gz", "run.json")}
+    assert main(["eval", *RUN, "--out", str(run), "--resume"]) == 0
+    assert "every episode is already recorded; nothing to run" in capsys.readouterr().err
+    assert {name: _files(run)[name] for name in kept} == kept
+
+
+@pytest.mark.parametrize("linked", ["report.html", "tasks.html", "table1.csv", "figures"])
+def test_no_write_follows_a_link_out_of_the_run(finished, tmp_path, capsys, linked):
+    run = tmp_path / "run"
+    shutil.copytree(finished, run)
+    outside = tmp_path / "outside"
+    outside.mkdir()
+    (outside / "keep.txt").write_text("mine")
+    target = outside if linked == "figures" else outside / "keep.txt"
+    shutil.rmtree(run / linked) if (run / linked).is_dir() else (run / linked).unlink(
+        missing_ok=True)
+    (run / linked).symlink_to(target)
+    assert main(["report", str(run), "--export", "csv"]) == 1
+    err = capsys.readouterr().err
+    assert "is a symbolic link" in err and "Traceback" not in err, err
+    assert _files(outside) == {"keep.txt": b"mine"}
+
+
+def test_resume_does_not_append_through_a_linked_episode_file(finished, tmp_path, capsys):
+    run = tmp_path / "run"
+    shutil.copytree(finished, run)
+    (run / "summary.json").unlink()  # (an unfinished run)
+    outside = tmp_path / "elsewhere.jsonl"
+    outside.write_bytes((run / "episodes.jsonl").read_bytes().split(b"\n", 1)[0] + b"\n")
+    (run / "episodes.jsonl").unlink()
+    (run / "episodes.jsonl").symlink_to(outside)
+    before = outside.read_bytes()
+    assert main(["eval", *RUN, "--out", str(run), "--resume"]) == 1
+    assert "is a symbolic link" in capsys.readouterr().err
+    assert outside.read_bytes() == before
+
+
+def test_a_shard_resumed_without_its_shard_is_refused(tmp_path, capsys):
+    run = tmp_path / "s1"
+    assert main(["eval", *RUN, "--shard", "1/2", "--out", str(run)]) == 0
+    (run / "summary.json").unlink()  # (as if interrupted)
+    capsys.readouterr()
+    assert main(["eval", *RUN, "--out", str(run), "--resume"]) == 1
+    err = capsys.readouterr().err
+    assert "was run with other options (shard differ)" in err, err
+    assert json.loads((run / "run.json").read_text())["shard"] == "1/2"
+
+
+def test_merge_joins_the_shards_control_arms(tmp_path, capsys):
+    shards = [tmp_path / f"s{i}" for i in (1, 2)]
+    for index, shard in enumerate(shards, start=1):
+        assert main(["eval", *RUN, "--shard", f"{index}/2", "--controls", "empty",
+                     "--out", str(shard)]) == 0
+    assert main(["merge", *map(str, shards), "--out", str(tmp_path / "merged")]) == 0
+    arm = tmp_path / "merged" / "controls" / "empty"
+    assert json.loads((arm / "summary.json").read_text())["episodes"] == 2
+    assert json.loads((arm / "run.json").read_text())["instruction_mode"] == "empty"
+    assert json.loads((tmp_path / "merged" / "run.json").read_text())["controls"] == ["empty"]
+    assert "Language effect: instructed − empty" in (tmp_path / "merged" / "report.md").read_text()
+    shutil.rmtree(shards[1] / "controls")
+    capsys.readouterr()
+    assert main(["merge", *map(str, shards), "--out", str(tmp_path / "again")]) == 1
+    assert "holds the control arms none but was run with empty" in capsys.readouterr().err
+    assert not (tmp_path / "again").exists()
+
+
+def test_two_comparisons_never_share_a_folder(tmp_path, capsys):
+    a = RESULTS / "expert"
+    others = [tmp_path / "x" / "run", tmp_path / "y" / "run"]
+    for other, source in zip(others, ("noop", "blind"), strict=True):
+        shutil.copytree(RESULTS / source, other)
+    out = tmp_path / "d"
+    assert main(["compare", str(a), *map(str, others), "--out", str(out)]) == 0
+    capsys.readouterr()
+    written = sorted(p.name for p in out.iterdir())
+    assert written == ["expert-vs-x-run", "expert-vs-y-run"]
+    for other in others:
+        result = json.loads((out / f"expert-vs-{other.parent.name}-run" / "compare.json")
+                            .read_text())
+        assert result["b"] == str(other)
+
+
+@pytest.mark.parametrize("shard", ["1/99999999999999999999", "1/100", "1/²"])
+def test_a_shard_count_is_bounded_by_the_episodes(tmp_path, capsys, shard):
+    assert main(["eval", *RUN, "--shard", shard, "--out", str(tmp_path / "run")]) == 2
+    err = capsys.readouterr().err
+    errors = [line for line in err.splitlines() if not line.startswith("specs: ")]
+    assert len(errors) == 1 and "shard" in errors[0] and "Traceback" not in err, err
+    assert not (tmp_path / "run").exists()
+
+
+def test_merge_bounds_a_recorded_shard_count(finished, tmp_path, capsys):
+    shard = tmp_path / "s1"
+    shutil.copytree(finished, shard)
+    options = json.loads((shard / "run.json").read_text())
+    (shard / "run.json").write_text(json.dumps(dict(options, shard="1/999999999")))
+    assert main(["merge", str(shard), "--out", str(tmp_path / "merged")]) in (1, 2)
+    err = capsys.readouterr().err
+    assert "at most 2 shards" in err and "Traceback" not in err, err
