@@ -163,6 +163,17 @@ def read_at_most(stream: BinaryIO, limit: int) -> bytes | None:
     return data if len(data) <= limit else None
 
 
+def read_file_at_most(path: Path, limit: int) -> tuple[bytes | None, str | None]:
+    """(the file's bytes, None), or (None, why not: "cannot be read (...)", "larger than
+    16 MiB")."""
+    try:
+        with open(path, "rb") as stream:
+            data = read_at_most(stream, limit)
+    except OSError as error:
+        return None, f"cannot be read ({error.strerror or error})"
+    return (data, None) if data is not None else (None, f"larger than {limit >> 20} MiB")
+
+
 def json_document(data: bytes) -> tuple[Any, str | None]:
     """(value, None) of a whole JSON document, or (None, what is wrong: "line 3, column 7:
     not JSON (Expecting value)", "line 1, column 2: not UTF-8 text (byte 0xff)")."""

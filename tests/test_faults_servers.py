@@ -558,7 +558,7 @@ def test_report_html_escapes_error_texts_policy_names_and_reasons(tmp_path):
                           "none", "0" * 64)
     stages = [{"stage": "source", "name": "source", "weight": 1.0, "intent": 0.0,
                "execution": 0.0, "first_step": None, "reason": "<b>reason</b>"}]
-    record = {"episode": "scene2/L0/t#r1", "scene": "scene2", "level": "L0",
+    record = {"episode": "scene2/L0/<i>t</i>#r1", "scene": "scene2", "level": "L0",
               "task": "scene2/L0/<i>t</i>", "intent_score": 0.0, "execution_score": 0.0,
               "complete": False, "stages": stages,
               "executed_behaviour": {"match": "<u>other</u>", "description": ""},

@@ -95,6 +95,15 @@ def test_a_shard_resumed_without_its_shard_is_refused(tmp_path, capsys):
     assert json.loads((run / "run.json").read_text())["shard"] == "1/2"
 
 
+def test_a_run_resumed_with_other_control_arms_is_refused(tmp_path, capsys):
+    run = tmp_path / "run"
+    assert main(["eval", *RUN, "--controls", "empty", "--out", str(run)]) == 0
+    (run / "summary.json").unlink()  # (as if interrupted)
+    capsys.readouterr()
+    assert main(["eval", *RUN, "--out", str(run), "--resume"]) == 1
+    assert "was run with other options (controls differ)" in capsys.readouterr().err
+
+
 def test_merge_joins_the_shards_control_arms(tmp_path, capsys):
     shards = [tmp_path / f"s{i}" for i in (1, 2)]
     for index, shard in enumerate(shards, start=1):

@@ -40,7 +40,7 @@ from robofollow.compiler.spec_files import Sources, spec_error
 from robofollow.compiler.splits import TestTask
 from robofollow.compiler.task_rules import TaskRules
 from robofollow.errors import InstructionError, RoboFollowError, SpecError
-from robofollow.files import json_lines, read_at_most
+from robofollow.files import json_lines, read_file_at_most
 
 FINDING_KINDS = ("invalid", "parse", "no-referent", "ambiguous", "expectation", "route",
                  "infeasible", "repertoire", "duplicate", "leakage", "level", "wording")
@@ -202,14 +202,9 @@ def _shown(value) -> str:
 def read_task_list(path) -> list[ListedTask]:
     """The tasks of a JSON Lines file (up to MAX_TASK_LIST_BYTES); a bad line is an error
     naming file:line and the field."""
-    try:
-        with open(path, "rb") as stream:
-            data = read_at_most(stream, MAX_TASK_LIST_BYTES)
-    except OSError as error:
-        raise RoboFollowError(f"cannot read {path}: {error.strerror or error}") from None
-    if data is None:
-        raise RoboFollowError(f"{path}: larger than {MAX_TASK_LIST_BYTES >> 20} MiB; a task "
-                              "list holds one line per task")
+    data, problem = read_file_at_most(path, MAX_TASK_LIST_BYTES)
+    if problem:
+        raise RoboFollowError(f"{path}: {problem}; a task list holds one line per task")
     tasks, seen = [], {}
     for line in json_lines(data):
         number = line.number

@@ -28,7 +28,7 @@ from robofollow.eval.scores import (
     read_scores,
     task_problem,
 )
-from robofollow.files import json_document, key_problem, read_at_most, shown
+from robofollow.files import json_document, key_problem, read_file_at_most, shown
 from robofollow.provenance import FIELDS as PROVENANCE_FIELDS
 from robofollow.provenance import NOTE
 
@@ -55,14 +55,9 @@ def _json_type(value) -> str:
 
 def _json_object(path: Path, what: str) -> dict:
     """A file that holds one JSON object (`what` it is), read up to MAX_JSON_BYTES."""
-    try:
-        with open(path, "rb") as stream:
-            data = read_at_most(stream, MAX_JSON_BYTES)
-    except OSError as error:
-        raise RunReadError(f"cannot read {path}: {error.strerror or error}") from None
-    if data is None:
-        raise RunReadError(f"{path}: larger than {MAX_JSON_BYTES >> 20} MiB; not {what} "
-                           "RoboFollow wrote")
+    data, problem = read_file_at_most(path, MAX_JSON_BYTES)
+    if problem:
+        raise RunReadError(f"{path}: {problem}; not {what} RoboFollow wrote")
     value, problem = json_document(data)
     if problem:
         raise RunReadError(f"{path}: {problem}")

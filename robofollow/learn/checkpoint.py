@@ -29,7 +29,7 @@ from robofollow.files import (
     json_document,
     key_problem,
     number_problem,
-    read_at_most,
+    read_file_at_most,
     shown,
     write_json_atomic,
 )
@@ -104,15 +104,9 @@ def load(folder: Path) -> Checkpoint:
 
 def _policy(path: Path) -> dict:
     """policy.json: a JSON object with META_KEYS, in FORMAT."""
-    try:
-        with open(path, "rb") as stream:
-            data = read_at_most(stream, MAX_POLICY_BYTES)
-    except OSError as error:
-        raise CheckpointError(f"{path}: not a readable baseline checkpoint "
-                              f"({error.strerror or error})") from None
-    if data is None:
-        raise CheckpointError(f"{path}: larger than {MAX_POLICY_BYTES >> 20} MiB; not a "
-                              "checkpoint's policy.json")
+    data, problem = read_file_at_most(path, MAX_POLICY_BYTES)
+    if problem:
+        raise CheckpointError(f"{path}: {problem}; not a baseline checkpoint's policy.json")
     meta, problem = json_document(data)
     if problem:
         raise CheckpointError(f"{path}: {problem}")
