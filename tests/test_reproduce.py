@@ -107,3 +107,14 @@ def test_a_recorded_policy_that_is_gone_asks_for_another(made, tmp_path, capsys)
     assert main(["reproduce", str(run)]) == 2
     err = capsys.readouterr().err
     assert "--policy re-runs its episodes with another" in err and "Traceback" not in err
+
+
+def test_compare_names_what_differs_between_the_runs_environments(made, tmp_path, capsys):
+    run = _copy(made, tmp_path)
+    options = json.loads((run / "run.json").read_text())
+    options["provenance"][0].update(numpy="2.3.5", cpu="another CPU")
+    (run / "run.json").write_text(json.dumps(options))
+    assert main(["compare", str(made), str(run)]) == 0
+    err = capsys.readouterr().err
+    assert (f"warning: run and run ran in different environments: numpy "
+            f"{environment()['numpy']} / 2.3.5; cpu {environment()['cpu']} / another CPU") in err

@@ -155,3 +155,17 @@ def test_merge_bounds_a_recorded_shard_count(finished, tmp_path, capsys):
     assert main(["merge", str(shard), "--out", str(tmp_path / "merged")]) in (1, 2)
     err = capsys.readouterr().err
     assert "at most 2 shards" in err and "Traceback" not in err, err
+
+
+def test_a_merge_records_and_names_every_environment_its_shards_ran_in(tmp_path, capsys):
+    shards = [tmp_path / f"s{i}" for i in (1, 2)]
+    for index, shard in enumerate(shards, start=1):
+        assert main(["eval", *RUN, "--shard", f"{index}/2", "--out", str(shard)]) == 0
+    options = json.loads((shards[1] / "run.json").read_text())
+    options["provenance"][0]["mujoco"] = "4.0.1"
+    (shards[1] / "run.json").write_text(json.dumps(options))
+    capsys.readouterr()
+    assert main(["merge", *map(str, shards), "--out", str(tmp_path / "merged")]) == 0
+    assert "the shards ran in different environments (mujoco" in capsys.readouterr().err
+    made = json.loads((tmp_path / "merged" / "run.json").read_text())["provenance"]
+    assert [entry["mujoco"] for entry in made] == [made[0]["mujoco"], "4.0.1"]
