@@ -88,12 +88,16 @@ def link_or_copy(source: Path, target: Path) -> None:
 RECORDED = ("provenance",)  # what a run records beside its options (not an option)
 
 
-def changed_options(previous: dict, current: dict) -> str | None:
-    """Why a run cannot be resumed with `current` options, or None when they are the same:
-    every option of either side is compared (one that only one side has differs)."""
+def differing_options(previous: dict, current: dict) -> list[str]:
+    """The options in which two runs differ, every option of either side compared (one that
+    only one side has differs), in `current`'s order then `previous`'s."""
     keys = [*current, *(key for key in previous if key not in current)]
-    changed = [key for key in keys
-               if key not in RECORDED and previous.get(key) != current.get(key)]
+    return [key for key in keys if key not in RECORDED and previous.get(key) != current.get(key)]
+
+
+def changed_options(previous: dict, current: dict) -> str | None:
+    """Why a run cannot be resumed with `current` options, or None when they are the same."""
+    changed = differing_options(previous, current)
     if not changed:
         return None
     return (f"was run with other options ({', '.join(changed)} differ); resume with the same "
@@ -172,6 +176,13 @@ def read_file_at_most(path: Path, limit: int) -> tuple[bytes | None, str | None]
     except OSError as error:
         return None, f"cannot be read ({error.strerror or error})"
     return (data, None) if data is not None else (None, f"larger than {limit >> 20} MiB")
+
+
+def read_json_file(path: Path, limit: int) -> tuple[Any, str | None]:
+    """(the JSON document a file holds, None), or (None, why not: read_file_at_most's
+    reasons, or json_document's)."""
+    data, problem = read_file_at_most(path, limit)
+    return (None, problem) if problem else json_document(data)
 
 
 def json_document(data: bytes) -> tuple[Any, str | None]:

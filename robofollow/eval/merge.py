@@ -11,6 +11,7 @@ from collections import Counter
 from dataclasses import replace
 from pathlib import Path
 
+from robofollow.benchmark.episode import Episode
 from robofollow.compiled_cache import Episodes
 from robofollow.errors import RoboFollowError
 from robofollow.eval.compare import CONTROLS, control_arms, named
@@ -34,7 +35,12 @@ from robofollow.eval.runner import (
 )
 from robofollow.eval.saved_run import load_provenance, load_run
 from robofollow.eval.scores import write_scores
-from robofollow.files import json_line, json_value, write_bytes_atomic
+from robofollow.files import (
+    differing_options,
+    json_line,
+    json_value,
+    write_bytes_atomic,
+)
 from robofollow.provenance import differences
 
 
@@ -52,9 +58,8 @@ def _whole(shards: list[Path], loaded: list[tuple[EvalOptions, list[dict]]],
         if options.shard is None:
             raise MergeError(f"{shard} is a whole run, not a shard (eval --shard I/N makes one)")
         if replace(options, shard=None) != whole:
-            theirs = replace(options, shard=None).to_json()
-            ours = whole.to_json()
-            differ = [k for k in dict.fromkeys([*ours, *theirs]) if theirs.get(k) != ours.get(k)]
+            differ = differing_options(replace(options, shard=None).to_json(),
+                                       whole.to_json())
             raise MergeError(f"{shard} was run with other options than {shards[0]} "
                              f"({', '.join(differ)} differ): shards of one run share them")
         parts.append(shard_of(options.shard, episodes))
@@ -95,21 +100,20 @@ def merge(benchmark: Episodes, shards: list[Path], out: Path) -> dict:
     out/controls/<mode>; returns the run's summary. Everything is checked before anything is
     written."""
     loaded = [load_run(shard) for shard in shards]
-    options = _whole(shards, loaded, len(select_episodes(
-        benchmark, replace(loaded[0][0], shard=None))))
-    if options.spec_digest != benchmark.spec.digest:
+    if loaded[0][0].spec_digest != benchmark.spec.digest:
         raise MergeError("the shards were run on other specs than these (--specs chooses the "
                          "run's)")
+    episodes = select_episodes(benchmark, replace(loaded[0][0], shard=None))  # (every arm's)
+    options = _whole(shards, loaded, len(episodes))
     arms = [(out, shards, loaded, options)]
     for mode in options.controls:
         arm_shards = [shard / CONTROLS / mode for shard in shards]
         arm_loaded = [load_run(shard) for shard in arm_shards]
-        arm = _whole(arm_shards, arm_loaded, len(select_episodes(benchmark, options)))
+        arm = _whole(arm_shards, arm_loaded, len(episodes))
         if arm != options.arm(mode):
             raise MergeError(f"{arm_shards[0]} is not the {mode} control arm of the shards' run")
         arms.append((out / CONTROLS / mode, arm_shards, arm_loaded, arm))
-    joined = [(arm_out, arm_shards, arm_options, *_joined(benchmark, arm_loaded, arm_options,
-                                                          arm_out))
+    joined = [(arm_out, arm_shards, arm_options, *_joined(episodes, arm_loaded, arm_out))
               for arm_out, arm_shards, arm_loaded, arm_options in arms]
     for arm_out, *_ in joined:
         _check_new(arm_out)
@@ -127,11 +131,10 @@ def _check_new(out: Path) -> None:
                          "--out")
 
 
-def _joined(benchmark: Episodes, loaded: list[tuple[EvalOptions, list[dict]]],
-            options: EvalOptions, out: Path) -> tuple[list[dict], dict[str, str | None]]:
+def _joined(episodes: list[Episode], loaded: list[tuple[EvalOptions, list[dict]]],
+            out: Path) -> tuple[list[dict], dict[str, str | None]]:
     """One arm's records from its shards, in the run's episode order, checked to hold every
     episode once; and each episode's motion."""
-    episodes = select_episodes(benchmark, options)
     expected = [e.id for e in episodes]
     records = [record for _, results in loaded for record in results]
     seen = Counter(record["episode"] for record in records)

@@ -31,3 +31,9 @@ def policy_kind(spec: str) -> PolicyKind:
 def is_server(spec: str) -> bool:
     """Whether a --policy names a policy server rather than an in-process policy."""
     return policy_kind(spec) in SERVER_KINDS
+
+
+def is_trained(spec: str) -> bool:
+    """Whether a --policy names a trained baseline (whose JAX version a run's provenance
+    names)."""
+    return policy_kind(spec) in ("baseline", "checkpoint")

@@ -13,9 +13,9 @@ from pathlib import Path
 
 from robofollow.compiled_cache import Episodes
 from robofollow.errors import RoboFollowError
-from robofollow.eval.policy_kind import policy_kind
+from robofollow.eval.policy_kind import is_trained
 from robofollow.eval.runner import episode_records
-from robofollow.eval.saved_run import load_options, load_provenance, load_records
+from robofollow.eval.saved_run import load_records, read_run_file
 from robofollow.provenance import ARITHMETIC, differences, environment
 
 DEFAULT_EPISODES = 8  # re-run by default: one per cell of two levels of four scenes
@@ -97,7 +97,7 @@ def reproduce(compiled: Episodes, run: Path, count: int = DEFAULT_EPISODES,
     """Run `count` of the run's recorded episodes again (or the named `episodes`) with its
     policy (or `policy`, e.g. a shipped baseline's name for a run made from its checkpoint
     folder) and compare them with the records."""
-    options = load_options(run)
+    options, made = read_run_file(run)
     if options.spec_digest != compiled.spec.digest:
         raise ReproduceError(f"{run} was run on other specs than these (--specs chooses the "
                              "run's)")
@@ -111,8 +111,7 @@ def reproduce(compiled: Episodes, run: Path, count: int = DEFAULT_EPISODES,
     else:
         chosen = sampled(recorded, count)
     options = replace(options, video="none", policy=policy or options.policy)
-    made = load_provenance(run)
-    here = environment(policy_kind(options.policy) in ("baseline", "checkpoint"))
+    here = environment(is_trained(options.policy))
     found = Reproduction(str(run), options.policy, [r["episode"] for r in chosen])
     if made:
         found.environment_differences = sorted(

@@ -44,7 +44,7 @@ from robofollow.eval.chance import references
 from robofollow.eval.episode import EpisodeRun, run_episode
 from robofollow.eval.instructions import given_instruction
 from robofollow.eval.loading import load_policy
-from robofollow.eval.policy_kind import policy_kind
+from robofollow.eval.policy_kind import is_trained, policy_kind
 from robofollow.eval.run_folder import (
     RESULTS,
     RESUMABLE,
@@ -282,11 +282,6 @@ class _LostEpisodes:
             self.stage.close()
 
 
-def _baseline(spec: str) -> bool:
-    """Whether a policy is a trained baseline (whose JAX version the provenance names)."""
-    return policy_kind(spec) in ("baseline", "checkpoint")
-
-
 def _isolated(spec: str) -> bool:
     """Whether a policy is someone else's code (module:factory), run in a worker process
     even with one worker; reference policies, servers and checkpoints run in this one."""
@@ -371,7 +366,7 @@ def evaluate(compiled: Episodes, out: Path, options: EvalOptions, workers: int =
         raise EvalRunError("the options' spec digest is not the compiled specs' digest")
     check_out(out)
     with run_lock(out):
-        prepare(out, options.to_json(), resume, environment(_baseline(options.policy)))
+        prepare(out, options.to_json(), resume, environment(is_trained(options.policy)))
         episodes = [e for e in select_episodes(compiled, options)
                     if up_to_round is None or e.round <= up_to_round]
         results_path = safe_path(out, RESULTS)

@@ -28,7 +28,7 @@ from robofollow.eval.scores import (
     read_scores,
     task_problem,
 )
-from robofollow.files import json_document, key_problem, read_file_at_most, shown
+from robofollow.files import key_problem, read_json_file, shown
 from robofollow.provenance import FIELDS as PROVENANCE_FIELDS
 from robofollow.provenance import NOTE
 
@@ -55,12 +55,9 @@ def _json_type(value) -> str:
 
 def _json_object(path: Path, what: str) -> dict:
     """A file that holds one JSON object (`what` it is), read up to MAX_JSON_BYTES."""
-    data, problem = read_file_at_most(path, MAX_JSON_BYTES)
+    value, problem = read_json_file(path, MAX_JSON_BYTES)
     if problem:
-        raise RunReadError(f"{path}: {problem}; not {what} RoboFollow wrote")
-    value, problem = json_document(data)
-    if problem:
-        raise RunReadError(f"{path}: {problem}")
+        raise RunReadError(f"{path}: {problem} ({what} expected)")
     if not isinstance(value, dict):
         raise RunReadError(f"{path}: a JSON {_json_type(value)}, not an object ({what})")
     return value

@@ -26,10 +26,9 @@ from pydantic import TypeAdapter, ValidationError
 
 from robofollow.errors import RoboFollowError, did_you_mean, error_text
 from robofollow.files import (
-    json_document,
     key_problem,
     number_problem,
-    read_file_at_most,
+    read_json_file,
     shown,
     write_json_atomic,
 )
@@ -104,12 +103,10 @@ def load(folder: Path) -> Checkpoint:
 
 def _policy(path: Path) -> dict:
     """policy.json: a JSON object with META_KEYS, in FORMAT."""
-    data, problem = read_file_at_most(path, MAX_POLICY_BYTES)
+    meta, problem = read_json_file(path, MAX_POLICY_BYTES)
     if problem:
-        raise CheckpointError(f"{path}: {problem}; not a baseline checkpoint's policy.json")
-    meta, problem = json_document(data)
-    if problem:
-        raise CheckpointError(f"{path}: {problem}")
+        raise CheckpointError(f"{path}: {problem} (a baseline checkpoint's policy.json "
+                              "expected)")
     if not isinstance(meta, dict):
         raise CheckpointError(f"{path}: {shown(meta)} is not a JSON object")
     if "format" in meta and meta["format"] != FORMAT:
