@@ -31,11 +31,11 @@ from robofollow.audit.splits import audit
 from robofollow.audit.task_list import listed_tests
 from robofollow.benchmark.output import write
 from robofollow.benchmark.pipeline import Compiled
-from robofollow.compiler import parser
-from robofollow.compiler.spec_files import spec_files
-from robofollow.compiler.spec_loader import load_partial
-from robofollow.compiler.splits import generate_examined
-from robofollow.compiler.training import training_behaviours
+from robofollow.compiler.authoring.spec_files import spec_files
+from robofollow.compiler.authoring.spec_loader import load_partial
+from robofollow.compiler.language import parser
+from robofollow.compiler.splits.generator import generate_examined
+from robofollow.compiler.splits.training import training_behaviours
 
 ROOT = Path(__file__).resolve().parent.parent
 TARGETS = {"cold": 2.0, "warm": 0.3, "one spec edited": 1.0}  # s, median on one quiet core

@@ -33,8 +33,8 @@ import numpy as np
 import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
 from robofollow.benchmark.pipeline import compile_specs
 from robofollow.benchmark.rounds import all_episodes
-from robofollow.eval.reference import ExpertPolicy
-from robofollow.eval.runner import EvalOptions, evaluate, read_results
+from robofollow.eval.policies.reference import ExpertPolicy
+from robofollow.eval.running.runner import EvalOptions, evaluate, read_results
 from robofollow.resources import builtin_specs
 from robofollow.sim.env import RoboFollowEnv
 

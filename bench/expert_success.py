@@ -19,8 +19,8 @@ from pathlib import Path
 
 from robofollow.benchmark.pipeline import compile_specs
 from robofollow.benchmark.rounds import all_episodes
-from robofollow.compiler.spec import LEVELS
-from robofollow.eval.verify import run_expert_episodes
+from robofollow.compiler.scene.spec import LEVELS
+from robofollow.eval.running.verify import run_expert_episodes
 
 ROOT = Path(__file__).resolve().parent.parent
 

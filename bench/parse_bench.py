@@ -16,7 +16,7 @@ import statistics
 import time
 from pathlib import Path
 
-from robofollow.compiler import parser
+from robofollow.compiler.language import parser
 
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data"
 

@@ -35,9 +35,9 @@ from importlib import metadata
 from pathlib import Path
 
 from robofollow.benchmark.episode import Episode
-from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.spec import LEVELS, Scene, Spec, scene_behaviours
-from robofollow.compiler.spec_files import spec_files
+from robofollow.compiler.authoring.spec_files import spec_files
+from robofollow.compiler.scene.behaviour import Behaviour
+from robofollow.compiler.scene.spec import LEVELS, Scene, Spec, scene_behaviours
 from robofollow.resources import cache_root
 
 FORMAT = 2  # bump when the file layout or the records' meaning changes
@@ -108,7 +108,9 @@ class Episodes:
 
 
 def _unknown(episode_id: str, task_ids: tuple[str, ...]) -> Exception:
-    from robofollow.benchmark.rounds import unknown_episode  # (imports the compiler: only on error)
+    from robofollow.benchmark.rounds import (
+        unknown_episode,  # (imports the compiler: only on error)
+    )
 
     return unknown_episode(episode_id, list(task_ids))
 

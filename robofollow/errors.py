@@ -132,3 +132,12 @@ def error_text(error: BaseException) -> str:
     """An exception in words: 'Type: message', or its repr when it says nothing."""
     text = str(error)
     return f"{type(error).__name__}: {text}" if text else repr(error)
+
+
+NAMED = 5  # episodes named in a warning or an error
+
+
+def named(items: list[str]) -> str:
+    """The first NAMED items, and how many more."""
+    more = f" and {len(items) - NAMED} more" if len(items) > NAMED else ""
+    return ", ".join(items[:NAMED]) + more

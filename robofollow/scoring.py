@@ -7,7 +7,7 @@ from __future__ import annotations
 import dataclasses
 
 from robofollow.benchmark.episode import Benchmark, EpisodeSetup
-from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
+from robofollow.compiler.planning.profile import DEFAULT_PROFILE, ScoringProfile
 from robofollow.errors import RoboFollowError
 from robofollow.oracle.results import EpisodeScore
 from robofollow.oracle.score import score

@@ -1,7 +1,11 @@
 """Malformed instructions, each with the error type it must raise and the column of the first
 bad word."""
 
-from robofollow.errors import UngrammaticalError, UnknownWordError, UnsupportedConstructError
+from robofollow.errors import (
+    UngrammaticalError,
+    UnknownWordError,
+    UnsupportedConstructError,
+)
 
 UNKNOWN, UNGRAMMATICAL, UNSUPPORTED = UnknownWordError, UngrammaticalError, UnsupportedConstructError
 

@@ -13,11 +13,24 @@ import math
 
 import numpy as np
 
-from robofollow.compiler import workspace
-from robofollow.compiler.behaviour import Behaviour, Step
-from robofollow.compiler.plans import (CLOSED, LIFT, OPEN, PRE_GRASP, PRE_PLACE, PUSH_HEIGHT,
-                                       PUSH_SPEED, RETREAT, STACK_CLEARANCE, TABLE_CLEARANCE,
-                                       Plan, PlanPoint, plan, push_points)
+from robofollow.compiler.planning.plans import (
+    CLOSED,
+    LIFT,
+    OPEN,
+    PRE_GRASP,
+    PRE_PLACE,
+    PUSH_HEIGHT,
+    PUSH_SPEED,
+    RETREAT,
+    STACK_CLEARANCE,
+    TABLE_CLEARANCE,
+    Plan,
+    PlanPoint,
+    plan,
+    push_points,
+)
+from robofollow.compiler.scene import workspace
+from robofollow.compiler.scene.behaviour import Behaviour, Step
 from robofollow.oracle.results import EpisodeScore
 from robofollow.scoring import score_recording
 from robofollow.sim import robot

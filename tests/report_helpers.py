@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from robofollow.eval.runner import EvalOptions
+from robofollow.eval.running.runner import EvalOptions
 
 OPTIONS = EvalOptions("mine:make", ("scene2",), ("L0", "L1"), 1, "normal", "none", "0" * 64)
 

@@ -2,8 +2,8 @@
 
 from hypothesis import strategies as st
 
-from robofollow.compiler import lf
-from robofollow.compiler.lexicon import VOCABULARY
+from robofollow.compiler.language import lf
+from robofollow.compiler.language.lexicon import VOCABULARY
 
 
 def _values(literal) -> st.SearchStrategy:

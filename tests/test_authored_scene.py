@@ -14,7 +14,7 @@ import pytest
 from robofollow.benchmark.pipeline import clean, compile_specs
 from robofollow.benchmark.rounds import episodes
 from robofollow.benchmark.splits_lock import LOCK_FILE, lock_entries
-from robofollow.compiler.spec import LEVELS
+from robofollow.compiler.scene.spec import LEVELS
 from robofollow.resources import builtin_specs
 from robofollow.sim.rollout import run_expert
 

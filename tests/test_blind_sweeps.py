@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from robofollow.benchmark.rounds import all_episodes
-from robofollow.eval.chance import references
+from robofollow.eval.running.chance import references
 from robofollow.scoring import score_recording
 from tests.judged import Script
 from tests.sim_helpers import benchmark

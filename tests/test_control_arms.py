@@ -10,7 +10,7 @@ import json
 import pytest
 
 from robofollow.cli import main
-from robofollow.eval.compare import compare_runs, run_scores
+from robofollow.eval.reports.comparison import compare_runs, run_scores
 
 pytestmark = pytest.mark.slow
 

@@ -18,7 +18,7 @@ import pytest
 
 from robofollow.benchmark.rounds import find_episode
 from robofollow.cli import main
-from robofollow.compiler.behaviour import Behaviour
+from robofollow.compiler.scene.behaviour import Behaviour
 from robofollow.data.check import check
 from robofollow.data.generate import GenerateError, generate
 from robofollow.data.jobs import demo_jobs, demo_seed

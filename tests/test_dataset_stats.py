@@ -18,7 +18,8 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from robofollow.data import lerobot_v21, lerobot_v30
-from robofollow.data.check import QUANTILE_NOTE, check
+from robofollow.data.check import check
+from robofollow.data.check_parts import QUANTILE_NOTE
 from robofollow.data.jobs import demo_jobs
 from robofollow.data.lerobot import VIDEO_KEYS, vectors
 from robofollow.data.sinks import STATS_EVERY, ImageStats

@@ -5,7 +5,7 @@ from pathlib import Path
 import pytest
 
 from robofollow.audit.entropy import entropy_bits, scene_entropy, scene_groups
-from robofollow.compiler.spec_loader import load_spec
+from robofollow.compiler.authoring.spec_loader import load_spec
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
 

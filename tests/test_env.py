@@ -9,7 +9,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 from robofollow.benchmark.rounds import UnknownEpisodeError
-from robofollow.compiler.plans import plan
+from robofollow.compiler.planning.plans import plan
 from robofollow.oracle.score import score
 from robofollow.sim import robot
 from robofollow.sim.env import RoboFollowEnv

@@ -8,17 +8,17 @@ import time
 import numpy as np
 import pytest
 
-from robofollow.compiler import workspace
-from robofollow.compiler.world import World
+from robofollow.compiler.scene import workspace
+from robofollow.compiler.scene.world import World
 from robofollow.errors import RoboFollowError
-from robofollow.eval.chance import references
-from robofollow.eval.episode import run_episode
-from robofollow.eval.policy import BadActionError, validate_actions
-from robofollow.eval.reference import (
+from robofollow.eval.policies.policy import BadActionError, validate_actions
+from robofollow.eval.policies.reference import (
     REFERENCE_POLICIES,
     BlindPolicy,
     understood,
 )
+from robofollow.eval.running.chance import references
+from robofollow.eval.running.episode import run_episode
 from robofollow.oracle.chance import available_behaviours
 from robofollow.sim import CHUNK, MAX_STEPS, robot
 from tests.sim_helpers import benchmark, episode

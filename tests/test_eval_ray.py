@@ -9,7 +9,7 @@ import pytest
 
 from robofollow.cli import main
 from robofollow.errors import RoboFollowError
-from robofollow.eval.run_folder import read_results
+from robofollow.eval.running.run_folder import read_results
 from robofollow.resources import builtin_specs
 from robofollow.workers import results
 

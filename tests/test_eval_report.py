@@ -8,9 +8,13 @@ from pathlib import Path
 import pytest
 
 from robofollow.cli import main
-from robofollow.eval.report import compare_reports, comparison_markdown, write_report
-from robofollow.eval.report_data import report_data
-from robofollow.eval.saved_run import RunReadError
+from robofollow.eval.reports.report import (
+    compare_reports,
+    comparison_markdown,
+    write_report,
+)
+from robofollow.eval.reports.report_data import report_data
+from robofollow.eval.running.saved_run import RunReadError
 from tests.report_helpers import OPTIONS, fake_record
 
 RESULTS = [
@@ -154,8 +158,8 @@ def test_l1_and_l3_cells_are_split_into_their_moved_and_as_trained_tasks():
 
 
 def test_the_printed_table_gives_moved_and_as_trained_rows_with_their_episodes():
-    from robofollow.eval.runner import summary
-    from robofollow.eval.tables import table_text
+    from robofollow.eval.reports.tables import table_text
+    from robofollow.eval.running.runner import summary
 
     lines = table_text(summary(MOTION_RECORDS, OPTIONS)).splitlines()
     assert max(len(line) for line in lines) <= 80
@@ -169,7 +173,7 @@ def test_the_printed_table_gives_moved_and_as_trained_rows_with_their_episodes()
     assert trained.split() == ["as-trained", "100", "100", "100*", "100", "75.0", "100*"]
     assert counts.split() == ["episodes", "(moved,", "as-trained):", "L1", "2,", "1;", "L3",
                               "1,", "1"]
-    from robofollow.eval.tables import LABEL, WIDTH
+    from robofollow.eval.reports.tables import LABEL, WIDTH
 
     # the L1 values in the L1 column (the second: levels L0, L1, L3), the L3 ones in the third
     assert LABEL + WIDTH <= moved.index("25.0") < moved.index("0.0") < LABEL + 2 * WIDTH
@@ -203,8 +207,8 @@ def test_records_without_their_motion_show_it_unknown_or_take_the_compiled_one(r
     text = write_report(run)[0].read_text()
     assert ("| scene2 | L1 | 50.0 | 41.7 | 33.3 | 3 | - | - | - | 0 | - | - | - | 0 | 3 |"
             in text)
-    from robofollow.eval.runner import summary
-    from robofollow.eval.tables import table_text
+    from robofollow.eval.reports.tables import table_text
+    from robofollow.eval.running.runner import summary
 
     printed = table_text(summary(older, OPTIONS))
     assert "motion unknown: L1 3, L3 2 (records" in " ".join(printed.split())
@@ -277,7 +281,7 @@ def test_the_report_command_takes_the_motion_of_older_records_from_the_compiled_
 
 
 def test_the_drop_from_l0_skips_an_l1_that_pairs_with_no_l0_task():
-    from robofollow.eval.drops import level_drops
+    from robofollow.eval.statistics.drops import level_drops
 
     def record(task, level, score):
         return {"scene": "scene2", "level": level, "task": f"scene2/{level}/{task}",

@@ -15,10 +15,11 @@ import numpy as np
 import pytest
 
 from robofollow.cli import main
-from robofollow.eval.instructions import given_instruction
-from robofollow.eval.loading import PolicyLoadError, load_policy
-from robofollow.eval.run_folder import SCORES
-from robofollow.eval.runner import (
+from robofollow.eval.policies.loading import PolicyLoadError, load_policy
+from robofollow.eval.reports.tables import table_text
+from robofollow.eval.running.instructions import given_instruction
+from robofollow.eval.running.run_folder import SCORES
+from robofollow.eval.running.runner import (
     START_TOLERANCE_M,
     EvalOptions,
     EvalRunError,
@@ -27,8 +28,7 @@ from robofollow.eval.runner import (
     select_episodes,
     start_hash,
 )
-from robofollow.eval.scores import read_scores, write_scores
-from robofollow.eval.tables import table_text
+from robofollow.eval.running.scores import read_scores, write_scores
 from robofollow.resources import builtin_specs
 from tests.sim_helpers import benchmark, cached_benchmark, episode
 

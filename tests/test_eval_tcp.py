@@ -13,12 +13,12 @@ import threading
 import numpy as np
 import pytest
 
-from robofollow.eval.episode import run_episode
-from robofollow.eval.loading import PolicyLoadError, load_policy
-from robofollow.eval.policy import PolicyConnectionError
-from robofollow.eval.reference import ExpertPolicy
-from robofollow.eval.tcp_client import TcpPolicy
-from robofollow.eval.tcp_server import TcpPolicyServer
+from robofollow.eval.policies.loading import PolicyLoadError, load_policy
+from robofollow.eval.policies.policy import PolicyConnectionError
+from robofollow.eval.policies.reference import ExpertPolicy
+from robofollow.eval.policies.tcp_client import TcpPolicy
+from robofollow.eval.running.episode import run_episode
+from robofollow.eval.serving.tcp_server import TcpPolicyServer
 from robofollow.sim import robot
 from tests.sim_helpers import benchmark, episode, serve_process
 

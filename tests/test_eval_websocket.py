@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 from websockets.sync.server import serve
 
-from robofollow.eval.episode import run_episode
-from robofollow.eval.policy import PolicyConnectionError
-from robofollow.eval.reference import ExpertPolicy
-from robofollow.eval.websocket_client import WebsocketPolicy
-from robofollow.eval.websocket_server import PolicyServer
-from robofollow.eval.wire import packb, unpackb
+from robofollow.eval.policies.policy import PolicyConnectionError
+from robofollow.eval.policies.reference import ExpertPolicy
+from robofollow.eval.policies.websocket_client import WebsocketPolicy
+from robofollow.eval.protocols.wire import packb, unpackb
+from robofollow.eval.running.episode import run_episode
+from robofollow.eval.serving.websocket_server import PolicyServer
 from robofollow.sim import robot
 from tests.sim_helpers import benchmark, cached_benchmark, episode
 
@@ -59,7 +59,7 @@ def test_the_served_expert_scores_as_the_in_process_expert(stage):
 
 @pytest.mark.slow
 def test_a_served_baseline_checkpoint_acts_as_the_in_process_one(stage):
-    from robofollow.eval.loading import load_policy
+    from robofollow.eval.policies.loading import load_policy
 
     record = episode(EPISODE)
     local = run_episode(benchmark(), stage, record, load_policy("baseline:scene2-text"))
@@ -167,7 +167,7 @@ def test_robofollow_serve_runs_a_policy_server(tmp_path):
 
 @pytest.mark.slow
 def test_a_server_killed_mid_run_costs_its_episodes_not_the_run(tmp_path):
-    from robofollow.eval.runner import EvalOptions, evaluate, read_results
+    from robofollow.eval.running.runner import EvalOptions, evaluate, read_results
 
     holder = {}
 

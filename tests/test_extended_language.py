@@ -7,13 +7,13 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.compiler import lf
-from robofollow.compiler.grounding import Grounder, GroundingError
-from robofollow.compiler.lexicon import VOCABULARY
-from robofollow.compiler.notation import notation
-from robofollow.compiler.parser import parse
-from robofollow.compiler.spec_loader import load_spec
-from robofollow.compiler.world import World
+from robofollow.compiler.authoring.spec_loader import load_spec
+from robofollow.compiler.language import lf
+from robofollow.compiler.language.lexicon import VOCABULARY
+from robofollow.compiler.language.notation import notation
+from robofollow.compiler.language.parser import parse
+from robofollow.compiler.scene.grounding import Grounder, GroundingError
+from robofollow.compiler.scene.world import World
 from robofollow.errors import UnknownWordError, UnsupportedConstructError
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
@@ -401,7 +401,7 @@ def test_suggestions_keep_the_word_class_the_grammar_expects():
 
 
 def test_no_unsupported_word_is_in_the_vocabulary_or_listed_twice():
-    from robofollow.compiler.coverage import _UNSUPPORTED, unsupported_words
+    from robofollow.compiler.language.coverage import _UNSUPPORTED, unsupported_words
     assert not unsupported_words() & set(VOCABULARY)
     listed = [word for _, words in _UNSUPPORTED for word in words]
     assert len(listed) == len(set(listed))
@@ -410,7 +410,7 @@ def test_no_unsupported_word_is_in_the_vocabulary_or_listed_twice():
 # --------------------------------------------------------------------- L2 / L3 wordings
 
 def test_wordings_use_a_new_construct_only_when_training_does(scenes):
-    from robofollow.compiler.wordings import Describer
+    from robofollow.compiler.splits.wordings import Describer
     grounder = Grounder(World(scenes["scene1"], "default"))
     bodies = ("yellow_block_1", "yellow_block_2")
     kinds = lambda describer: {c.type for body in bodies  # noqa: E731

@@ -173,7 +173,7 @@ def test_a_policy_that_dies_or_exits_costs_its_episode_not_the_run(tmp_path, wor
 
 def test_in_process_a_systemexit_is_recorded_and_ctrl_c_still_stops(tmp_path, monkeypatch):
     from robofollow.compiled_cache import load
-    from robofollow.eval.runner import EvalOptions, evaluate, read_results
+    from robofollow.eval.running.runner import EvalOptions, evaluate, read_results
 
     compiled = load(SPECS)
     tasks = ("scene1/L0/pickup_yellow_block_2", "scene1/L0/pickup_yellow_block_1_right")
@@ -283,7 +283,7 @@ def test_outputs_that_cannot_be_written_are_refused_up_front(tmp_path, capsys):
 
 def test_a_disk_that_fills_mid_run_stops_it_with_whole_lines_and_it_resumes(tmp_path, capsys,
                                                                             monkeypatch):
-    from robofollow.eval.run_folder import ResultsFile
+    from robofollow.eval.running.run_folder import ResultsFile
 
     out, writes = tmp_path / "run", []
     original = ResultsFile.write
@@ -309,7 +309,7 @@ def test_a_disk_that_fills_mid_run_stops_it_with_whole_lines_and_it_resumes(tmp_
 
 
 def test_json_lines_are_split_at_newlines_only(tmp_path):
-    from robofollow.eval.run_folder import ResultsFile, read_results
+    from robofollow.eval.running.run_folder import ResultsFile, read_results
 
     record = {"episode": "scene1/L0/t\u2028x\u2029#r1", "scene": "scene1", "level": "L0",
               "task": "scene1/L0/t\u2028x\u2029",

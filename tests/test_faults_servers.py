@@ -27,24 +27,28 @@ from websockets.sync.client import connect
 from websockets.sync.server import serve
 
 from robofollow.cli import main, parser
-from robofollow.eval.episode import run_episode
-from robofollow.eval.limits import IDLE_TIMEOUT_S, MAX_CLIENTS, MAX_MESSAGE_BYTES
-from robofollow.eval.loading import PolicyLoadError, load_policy
-from robofollow.eval.policy import (
+from robofollow.eval.policies.loading import PolicyLoadError, load_policy
+from robofollow.eval.policies.policy import (
     BadActionError,
     PolicyConnectionError,
     PolicyServerError,
     PrivilegedRefusedError,
     validate_actions,
 )
-from robofollow.eval.report import write_report
-from robofollow.eval.runner import EvalOptions
-from robofollow.eval.serving import ServerLimits
-from robofollow.eval.tcp_client import TcpPolicy
-from robofollow.eval.tcp_server import TcpPolicyServer
-from robofollow.eval.websocket_client import WebsocketPolicy
-from robofollow.eval.websocket_server import PolicyServer
-from robofollow.eval.wire import packb, unpackb
+from robofollow.eval.policies.tcp_client import TcpPolicy
+from robofollow.eval.policies.websocket_client import WebsocketPolicy
+from robofollow.eval.protocols.limits import (
+    IDLE_TIMEOUT_S,
+    MAX_CLIENTS,
+    MAX_MESSAGE_BYTES,
+)
+from robofollow.eval.protocols.wire import packb, unpackb
+from robofollow.eval.reports.report import write_report
+from robofollow.eval.running.episode import run_episode
+from robofollow.eval.running.runner import EvalOptions
+from robofollow.eval.serving.serving import ServerLimits
+from robofollow.eval.serving.tcp_server import TcpPolicyServer
+from robofollow.eval.serving.websocket_server import PolicyServer
 from robofollow.resources import builtin_specs
 from robofollow.sim import robot
 from tests.server_helpers import WAIT, _array, _client, _frame, _read, served
@@ -577,17 +581,17 @@ def test_report_html_escapes_error_texts_policy_names_and_reasons(tmp_path):
 
 
 def test_every_html_template_autoescapes_and_none_marks_a_value_safe():
-    from robofollow.eval.pages import PAGES
+    from robofollow.eval.reports.pages import PAGES
 
     package = Path(__file__).parents[1] / "robofollow"
     html = [path for path in package.rglob("*.j2") if ".html" in path.name]
     assert html  # report.html.j2 at least
     for path in html:
-        assert path.parent.name == "templates" and path.parent.parent.name == "eval", path
+        assert path.parent.name == "templates" and path.parent.parent.name == "reports", path
         assert PAGES.autoescape(path.name) is True
         assert not re.search(r"\|\s*safe|Markup|autoescape\s+false", path.read_text()), path
-    for module in ("report.py", "compare.py", "pages.py"):
-        assert "Markup" not in (package / "eval" / module).read_text(), module
+    for module in (package / "eval" / "reports").glob("*.py"):
+        assert "Markup" not in module.read_text(), module
 
 
 # -- privileged observations ---------------------------------------------------------------

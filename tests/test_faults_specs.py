@@ -21,7 +21,12 @@ import pytest
 
 from robofollow import cli
 from robofollow.benchmark import output
-from robofollow.compiler.spec import MAX_BODIES, MAX_LAYOUTS, MAX_SPEC_BYTES, MAX_STACK
+from robofollow.compiler.scene.spec import (
+    MAX_BODIES,
+    MAX_LAYOUTS,
+    MAX_SPEC_BYTES,
+    MAX_STACK,
+)
 from tests.spec_helpers import VALID
 
 MARK = "«"
@@ -310,7 +315,7 @@ def test_the_symlink_message_says_why_without_reading_the_target(tmp_path, capsy
 
 
 def test_a_long_chain_of_derived_layouts_within_the_limit_loads(tmp_path):
-    from robofollow.compiler.spec_loader import load_spec
+    from robofollow.compiler.authoring.spec_loader import load_spec
 
     chain = "\n".join(f"    layout d{i} from {'swapped' if i == 0 else f'd{i - 1}'} {{ }}"
                       for i in range(MAX_LAYOUTS - 2))
@@ -321,8 +326,8 @@ def test_a_long_chain_of_derived_layouts_within_the_limit_loads(tmp_path):
 
 
 def test_a_stack_at_the_limit_loads_and_poses_without_recursion(tmp_path):
-    from robofollow.compiler.spec_loader import load_spec
-    from robofollow.compiler.world import World
+    from robofollow.compiler.authoring.spec_loader import load_spec
+    from robofollow.compiler.scene.world import World
 
     bodies = "\n".join(f"    object c{i} cube half=0.005 color=red rgb=(1, 0, 0) mass=0.2 "
                        "friction=0.1" for i in range(MAX_STACK))

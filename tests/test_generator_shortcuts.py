@@ -8,11 +8,16 @@
 
 from __future__ import annotations
 
-from robofollow.compiler import lf
-from robofollow.compiler.grounding import Grounder, GroundingError, first_unstable, position_reads
-from robofollow.compiler.parser import parse
-from robofollow.compiler.realize import STYLES, Realizer, realize
-from robofollow.compiler.world import CORNERS, World, jitter_worlds
+from robofollow.compiler.language import lf
+from robofollow.compiler.language.parser import parse
+from robofollow.compiler.language.realize import STYLES, Realizer, realize
+from robofollow.compiler.scene.grounding import (
+    Grounder,
+    GroundingError,
+    first_unstable,
+    position_reads,
+)
+from robofollow.compiler.scene.world import CORNERS, World, jitter_worlds
 from tests.sim_helpers import benchmark
 
 

@@ -7,10 +7,10 @@ from pathlib import Path
 import networkx as nx
 import pytest
 
-from robofollow.compiler.behaviour import Behaviour, Step
-from robofollow.compiler.goals import goal_graph, graph_to_dict, stage_order
-from robofollow.compiler.spec_loader import load_spec
-from robofollow.compiler.training import check_training
+from robofollow.compiler.authoring.spec_loader import load_spec
+from robofollow.compiler.planning.goals import goal_graph, graph_to_dict, stage_order
+from robofollow.compiler.scene.behaviour import Behaviour, Step
+from robofollow.compiler.splits.training import check_training
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
 

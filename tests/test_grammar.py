@@ -6,7 +6,7 @@ import zipfile
 
 import pytest
 
-from robofollow.compiler.lexicon import TERMINALS, VOCABULARY
+from robofollow.compiler.language.lexicon import TERMINALS, VOCABULARY
 from robofollow.resources import grammar_text
 
 
@@ -25,7 +25,7 @@ def test_every_terminal_has_words():
 
 
 def test_grammar_is_conflict_free_lalr():
-    from robofollow.compiler.parser import _lark
+    from robofollow.compiler.language.parser import _lark
     parser = _lark()  # built with strict=True: any LALR conflict raises
     assert parser.options.parser == "lalr" and parser.options.strict
 
@@ -38,7 +38,7 @@ def test_wheel_ships_the_grammar_and_parses_when_installed(tmp_path):
     wheel = next((tmp_path / "dist").glob("robofollow-*.whl"))
     names = zipfile.ZipFile(wheel).namelist()
     assert "robofollow/grammar/instruction.lark" in names
-    assert "robofollow/compiler/templates/english.j2" in names
+    assert "robofollow/compiler/language/templates/english.j2" in names
     assert "robofollow/sim/templates/scene.xml.j2" in names
     assert {f"robofollow/specs/scene{i}.rf" for i in range(1, 5)} <= set(names)
     assert {"robofollow/baselines/scene2-text/policy.json",
@@ -46,7 +46,7 @@ def test_wheel_ships_the_grammar_and_parses_when_installed(tmp_path):
     target = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--target",
                     str(target), str(wheel)], check=True, capture_output=True)
-    code = ("import robofollow, sys; from robofollow.compiler.parser import parse; "
+    code = ("import robofollow, sys; from robofollow.compiler.language.parser import parse; "
             "from robofollow.resources import builtin_specs; "
             "assert builtin_specs().is_relative_to(robofollow.__path__[0]); "
             "print(robofollow.__file__); print(parse('Pick up the red cube.').object.noun)")

@@ -5,8 +5,8 @@ other layouts (where many do not)."""
 
 from __future__ import annotations
 
-from robofollow.compiler.grounding import Grounder, GroundingError
-from robofollow.compiler.world import World, jitter_worlds
+from robofollow.compiler.scene.grounding import Grounder, GroundingError
+from robofollow.compiler.scene.world import World, jitter_worlds
 from tests.sim_helpers import benchmark
 
 

@@ -23,11 +23,18 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 
-from robofollow.compiler.behaviour import Behaviour, Step
-from robofollow.compiler.plans import LIFT, OPEN, PUSH_TRAVEL, PlanPoint, plan, push_points
-from robofollow.compiler.world import World
-from robofollow.eval.episode import run_episode
-from robofollow.eval.reference import REFERENCE_POLICIES
+from robofollow.compiler.planning.plans import (
+    LIFT,
+    OPEN,
+    PUSH_TRAVEL,
+    PlanPoint,
+    plan,
+    push_points,
+)
+from robofollow.compiler.scene.behaviour import Behaviour, Step
+from robofollow.compiler.scene.world import World
+from robofollow.eval.policies.reference import REFERENCE_POLICIES
+from robofollow.eval.running.episode import run_episode
 from robofollow.sim import robot
 from tests.judged import Script, analog, holding_on, released_higher, step_of, without
 from tests.sim_helpers import benchmark, episode

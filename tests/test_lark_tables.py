@@ -1,9 +1,9 @@
-"""Cached LALR tables (robofollow.compiler.lark_tables): written once, read back unchanged,
+"""Cached LALR tables (robofollow.compiler.language.lark_tables): written once, read back unchanged,
 rebuilt when corrupt, and not written when caching is off."""
 
 from __future__ import annotations
 
-from robofollow.compiler.lark_tables import cached_lark
+from robofollow.compiler.language.lark_tables import cached_lark
 
 GRAMMAR = 'start: "a" NAME\nNAME: /[a-z]+/\n%ignore " "\n'
 

@@ -27,11 +27,27 @@ def test_the_code_keeps_every_contract():
 
 
 @pytest.mark.parametrize(("module", "bad_import", "broken"), [
-    ("compiler/lf.py", "import robofollow.eval.report", "Data flows one way"),
-    ("oracle/metrics.py", "import mujoco", "no MuJoCo"),
+    ("compiler/language/lf.py", "import robofollow.eval.reports.report", "Data flows one way"),
+    ("eval/statistics/metrics.py", "import mujoco", "no MuJoCo"),
     ("audit/entropy.py", "import robofollow.oracle.score", "robofollow.audit"),
-    ("eval/run_folder.py", "import robofollow.eval.runner", "No import cycles"),
-    ("eval/tcp_client.py", "import robofollow.eval.tcp_server", "never import the servers"),
+    ("eval/running/run_folder.py", "import robofollow.eval.running.runner", "No import cycles"),
+    # the compiler's rooms: up a floor, and across to the room beside
+    ("compiler/language/lf.py", "import robofollow.compiler.scene.spec", "The compiler's rooms"),
+    ("compiler/scene/world.py", "import robofollow.compiler.splits.generator",
+     "The compiler's rooms"),
+    ("compiler/authoring/layouts.py", "import robofollow.compiler.planning.goals",
+     "The compiler's rooms"),
+    ("compiler/planning/goals.py", "import robofollow.compiler.authoring.spec_loader",
+     "The compiler's rooms"),
+    # evaluation's rooms: the clients never import the servers, the statistics never the runner
+    ("eval/policies/tcp_client.py", "import robofollow.eval.serving.tcp_server",
+     "Evaluation's rooms"),
+    ("eval/statistics/paired.py", "import robofollow.eval.running.runner", "Evaluation's rooms"),
+    ("eval/statistics/metrics.py", "import robofollow.eval.policies.policy",
+     "Evaluation's rooms"),
+    ("eval/serving/serving.py", "import robofollow.eval.reports.report", "Evaluation's rooms"),
+    ("eval/protocols/wire.py", "import robofollow.eval.policies.policy", "Evaluation's rooms"),
+    ("eval/statistics/intervals.py", "import robofollow.files", "numbers in, numbers out"),
 ])
 def test_a_bad_import_breaks_a_contract(tmp_path, module, bad_import, broken):
     shutil.copytree(ROOT / "robofollow", tmp_path / "robofollow",

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from robofollow.cli import main
+from robofollow.eval.statistics.metrics import wilson
 from robofollow.learn import checkpoint
 from robofollow.learn.demos import downsample, read_demonstrations
 from robofollow.learn.model import Architecture, forward, init
@@ -17,7 +18,6 @@ from robofollow.learn.options import KINDS
 from robofollow.learn.policy import load_baseline
 from robofollow.learn.tokens import UNKNOWN, encode, vocabulary, words
 from robofollow.learn.train import TrainOptions, train
-from robofollow.oracle.metrics import wilson
 from robofollow.sim.objects import SHAPE as OBJECTS_SHAPE
 
 TASKS = "pickup_left_cube,pickup_right_cube"
@@ -155,7 +155,7 @@ def test_generate_train_evaluate_every_baseline(dataset, tmp_path):
     chunk = policy.act(observation)
     assert chunk.shape == (25, 14) and np.array_equal(chunk, policy.act(observation))
     # an objects baseline served over the websocket protocol: the client sends what it reads
-    from robofollow.eval.websocket_server import PolicyServer
+    from robofollow.eval.serving.websocket_server import PolicyServer
     from tests.server_helpers import served
     from tests.sim_helpers import benchmark
 
@@ -218,7 +218,7 @@ def test_wilson_intervals():
 
 
 def test_shipped_baselines_load_by_name():
-    from robofollow.eval.loading import load_policy
+    from robofollow.eval.policies.loading import load_policy
     from robofollow.learn.policy import shipped_names
 
     assert {"scene2-text", "scene2-blind"} <= set(shipped_names())

@@ -2,7 +2,7 @@
 
 import pytest
 
-from robofollow.compiler.lexicon import VOCABULARY, tokenize
+from robofollow.compiler.language.lexicon import VOCABULARY, tokenize
 from robofollow.errors import UnknownWordError
 
 

@@ -3,8 +3,8 @@
 import pytest
 from pydantic import ValidationError
 
-from robofollow.compiler import lf
-from robofollow.compiler.parser import parse
+from robofollow.compiler.language import lf
+from robofollow.compiler.language.parser import parse
 
 RED = lf.ColorIs(color="red")
 BALL = lf.Ref(noun="sphere")

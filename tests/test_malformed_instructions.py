@@ -2,7 +2,7 @@
 
 import pytest
 
-from robofollow.compiler.parser import parse
+from robofollow.compiler.language.parser import parse
 from robofollow.errors import (
     InstructionError,
     RoboFollowError,

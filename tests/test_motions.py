@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from robofollow.compiler.behaviour import Behaviour, Step
-from robofollow.compiler.motions import Repertoire, differences, motion
-from robofollow.compiler.world import World
+from robofollow.compiler.planning.motions import Repertoire, differences, motion
+from robofollow.compiler.scene.behaviour import Behaviour, Step
+from robofollow.compiler.scene.world import World
 from tests.sim_helpers import benchmark
 
 

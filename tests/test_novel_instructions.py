@@ -2,8 +2,8 @@
 
 import pytest
 
-from robofollow.compiler.notation import notation
-from robofollow.compiler.parser import parse
+from robofollow.compiler.language.notation import notation
+from robofollow.compiler.language.parser import parse
 
 CASES = [
     ('Pick up the block to the left of the red cylinder.',

@@ -10,11 +10,11 @@ import mujoco
 import numpy as np
 import pytest
 
-from robofollow.eval.episode import observation
-from robofollow.eval.runner import EvalOptions, evaluate
-from robofollow.eval.serving import observation_layout
-from robofollow.eval.tcp_server import TcpPolicyServer
-from robofollow.eval.websocket_server import PolicyServer
+from robofollow.eval.running.episode import observation
+from robofollow.eval.running.runner import EvalOptions, evaluate
+from robofollow.eval.serving.serving import observation_layout
+from robofollow.eval.serving.tcp_server import TcpPolicyServer
+from robofollow.eval.serving.websocket_server import PolicyServer
 from robofollow.sim.objects import FIELDS, SHAPE, _rows, objects_over, observe_objects
 from robofollow.sim.recorder import Recorder
 from robofollow.sim.stage import Stage
@@ -151,8 +151,8 @@ def test_a_run_whose_policy_reads_objects_says_perception_was_removed(tmp_path):
                           ("L1",), 1, "normal", "none", benchmark().spec.digest, (), 1)
     result = evaluate(cached_benchmark(), tmp_path / "run", options, progress=False)
     assert result["observed"] == ["objects", "state"]
-    from robofollow.eval.report import write_report
-    from robofollow.eval.tables import table_text
+    from robofollow.eval.reports.report import write_report
+    from robofollow.eval.reports.tables import table_text
 
     assert "Perception removed" in write_report(tmp_path / "run")[1].read_text()
     assert "\nObjects   perception removed: the policy read the objects" in table_text(result)

@@ -9,12 +9,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from robofollow.compiler.spec import LEVELS
-from robofollow.compiler.world import World
-from robofollow.eval.chance import references
-from robofollow.eval.episode import run_episode
-from robofollow.eval.instructions import given_instruction
-from robofollow.eval.reference import REFERENCE_POLICIES
+from robofollow.compiler.scene.spec import LEVELS
+from robofollow.compiler.scene.world import World
+from robofollow.eval.policies.reference import REFERENCE_POLICIES
+from robofollow.eval.running.chance import references
+from robofollow.eval.running.episode import run_episode
+from robofollow.eval.running.instructions import given_instruction
 from robofollow.oracle.chance import (
     available_behaviours,
     best_guess,

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from robofollow.compiler.behaviour import Behaviour, Step
-from robofollow.compiler.plans import Plan, plan
+from robofollow.compiler.planning.plans import Plan, plan
+from robofollow.compiler.scene.behaviour import Behaviour, Step
 from robofollow.oracle.score import score
 from robofollow.sim import robot
 from robofollow.sim.expert import Expert

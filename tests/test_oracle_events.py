@@ -8,8 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from robofollow.compiler.profile import DEFAULT_PROFILE
-from robofollow.compiler.world import World
+from robofollow.compiler.planning.profile import DEFAULT_PROFILE
+from robofollow.compiler.scene.world import World
 from robofollow.oracle.recording import Recording
 from robofollow.trajectory import CONTACT_EXTRAS, Trajectory, tilt
 from tests.sim_helpers import benchmark

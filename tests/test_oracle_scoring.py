@@ -14,9 +14,13 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.profile import DEFAULT_PROFILE, STRICT_PROFILE, ScoringProfile
-from robofollow.oracle.metrics import table
+from robofollow.compiler.planning.profile import (
+    DEFAULT_PROFILE,
+    STRICT_PROFILE,
+    ScoringProfile,
+)
+from robofollow.compiler.scene.behaviour import Behaviour
+from robofollow.eval.statistics.metrics import table
 from robofollow.oracle.score import score
 from robofollow.resources import builtin_specs
 from robofollow.scoring import RecordingMismatchError, score_recording

@@ -9,11 +9,11 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.compiler.behaviour import describe_steps
-from robofollow.compiler.grounding import Grounder
-from robofollow.compiler.parser import parse
-from robofollow.compiler.spec_loader import load_spec
-from robofollow.compiler.world import World
+from robofollow.compiler.authoring.spec_loader import load_spec
+from robofollow.compiler.language.parser import parse
+from robofollow.compiler.scene.behaviour import describe_steps
+from robofollow.compiler.scene.grounding import Grounder
+from robofollow.compiler.scene.world import World
 
 DATA = Path(__file__).parent / "data"
 SPECS = Path(__file__).resolve().parent.parent / "specs"

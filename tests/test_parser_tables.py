@@ -1,4 +1,4 @@
-"""The parser's own loop over lark's LALR tables (robofollow.compiler.parser) must build exactly
+"""The parser's own loop over lark's LALR tables (robofollow.compiler.language.parser) must build exactly
 the syntax records that lark's own parser builds from the same grammar, on every instruction of
 the corpora and on malformed ones (the same error, or none, at the same token): a lark release
 that changes its private table layout fails here, not silently in `parse`."""
@@ -11,7 +11,7 @@ from pathlib import Path
 
 from lark.exceptions import UnexpectedToken
 
-from robofollow.compiler import parser
+from robofollow.compiler.language import parser
 from robofollow.errors import InstructionError, UngrammaticalError
 from tests.instruction_cases import CASES
 

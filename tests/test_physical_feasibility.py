@@ -1,4 +1,4 @@
-"""Physical sanity at compile time (compiler/feasibility.py): the open fingers clear every
+"""Physical sanity at compile time (compiler/planning/feasibility.py): the open fingers clear every
 neighbour at the jitter extremes, a bowl takes one object, a stack's top comes to rest. Each
 rule on hand-made specs: the problem itself, a training task refused at its line, a listed test
 task reported by `robofollow audit --tasks`."""
@@ -10,16 +10,16 @@ import json
 import pytest
 
 from robofollow.cli import main
-from robofollow.compiler.behaviour import Behaviour, Step
-from robofollow.compiler.feasibility import (
+from robofollow.compiler.authoring.spec_loader import load_spec
+from robofollow.compiler.planning.feasibility import (
     FINGER_MARGIN,
     OPEN_FINGER_REACH,
     infeasible,
     stack_friction_bound,
 )
-from robofollow.compiler.spec_loader import load_spec
-from robofollow.compiler.training import check_training
-from robofollow.compiler.world import World
+from robofollow.compiler.scene.behaviour import Behaviour, Step
+from robofollow.compiler.scene.world import World
+from robofollow.compiler.splits.training import check_training
 from robofollow.errors import SpecErrors
 
 SPEC = """\

@@ -5,12 +5,18 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.compiler.behaviour import Behaviour, Step
-from robofollow.compiler.plans import (PLACE_GAP, PUSH_FACE, PUSH_RUN_UP, PUSH_SPEED,
-                                       PUSH_TRAVEL, plan)
-from robofollow.compiler.spec_loader import load_spec
-from robofollow.compiler.training import check_training
-from robofollow.compiler.world import World
+from robofollow.compiler.authoring.spec_loader import load_spec
+from robofollow.compiler.planning.plans import (
+    PLACE_GAP,
+    PUSH_FACE,
+    PUSH_RUN_UP,
+    PUSH_SPEED,
+    PUSH_TRAVEL,
+    plan,
+)
+from robofollow.compiler.scene.behaviour import Behaviour, Step
+from robofollow.compiler.scene.world import World
+from robofollow.compiler.splits.training import check_training
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
 

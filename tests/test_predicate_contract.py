@@ -1,10 +1,10 @@
-"""The compiler writes goal predicates by name (compiler/goals.py) and the oracle dispatches on
+"""The compiler writes goal predicates by name (compiler/planning/goals.py) and the oracle dispatches on
 those names (oracle/stages.py): every name written has its evaluator, and every evaluator is
 reached by some task of the benchmark."""
 
 from __future__ import annotations
 
-from robofollow.compiler.goals import goal_graph
+from robofollow.compiler.planning.goals import goal_graph
 from robofollow.oracle.stages import AT_REST, EVALUATORS
 from tests.sim_helpers import benchmark
 

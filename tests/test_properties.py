@@ -3,9 +3,9 @@
 import pytest
 from hypothesis import given, note
 
-from robofollow.compiler import lf
-from robofollow.compiler.parser import parse
-from robofollow.compiler.realize import STYLES, realize
+from robofollow.compiler.language import lf
+from robofollow.compiler.language.parser import parse
+from robofollow.compiler.language.realize import STYLES, realize
 from robofollow.errors import InstructionError
 from tests import strategies
 

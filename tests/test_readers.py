@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from robofollow.errors import RoboFollowError
-from robofollow.eval import scores
-from robofollow.eval.run_folder import CorruptResultsError, read_results
-from robofollow.eval.saved_run import load_options, summarised_episodes
-from robofollow.eval.scores import compact_records, read_scores
+from robofollow.eval.running import scores
+from robofollow.eval.running.run_folder import CorruptResultsError, read_results
+from robofollow.eval.running.saved_run import load_options, summarised_episodes
+from robofollow.eval.running.scores import compact_records, read_scores
 from tests.cli_helpers import run as run_cli
 from tests.report_helpers import fake_record
 
@@ -231,7 +231,7 @@ def _without(key: str):
 
 
 def test_run_json_with_provenance_reads_its_options_and_environments(tmp_path):
-    from robofollow.eval.saved_run import load_provenance
+    from robofollow.eval.running.saved_run import load_provenance
 
     shipped = load_options(BLIND)
     folder = _run_json(tmp_path, _with(provenance=PROVENANCE))

@@ -8,11 +8,11 @@ import pytest
 
 from robofollow import cli
 from robofollow.benchmark.pipeline import compile_specs
-from robofollow.compiler.grounding import ground
-from robofollow.compiler.observation import look_alike, same_observation
-from robofollow.compiler.parser import parse
-from robofollow.compiler.spec_loader import load_spec
-from robofollow.compiler.world import World
+from robofollow.compiler.authoring.spec_loader import load_spec
+from robofollow.compiler.language.parser import parse
+from robofollow.compiler.scene.grounding import ground
+from robofollow.compiler.scene.observation import look_alike, same_observation
+from robofollow.compiler.scene.world import World
 from robofollow.sim.objects import FIELDS, observe_objects
 from robofollow.sim.simulation import Simulation
 from robofollow.vqa.answers import named

@@ -14,12 +14,18 @@ from pathlib import Path
 import pytest
 
 from robofollow.cli import main
-from robofollow.eval.outcomes import STILL, UNRECORDED, UNTOUCHED, UNTRAINED, closest
-from robofollow.eval.report import ReportError, compare_reports, write_report
-from robofollow.eval.report_data import report_data
-from robofollow.eval.run_folder import RESULTS, RUN_FILE, SCORES, prepare
-from robofollow.eval.runner import summary
-from robofollow.eval.scores import write_scores
+from robofollow.eval.reports.report import ReportError, compare_reports, write_report
+from robofollow.eval.reports.report_data import report_data
+from robofollow.eval.running.outcomes import (
+    STILL,
+    UNRECORDED,
+    UNTOUCHED,
+    UNTRAINED,
+    closest,
+)
+from robofollow.eval.running.run_folder import RESULTS, RUN_FILE, SCORES, prepare
+from robofollow.eval.running.runner import summary
+from robofollow.eval.running.scores import write_scores
 from robofollow.provenance import environment
 from tests.report_helpers import OPTIONS, fake_record
 

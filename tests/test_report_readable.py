@@ -10,9 +10,9 @@ import re
 from collections import Counter
 from dataclasses import replace
 
-from robofollow.eval.outcomes import DID, UNTRAINED
-from robofollow.eval.report import write_report
-from robofollow.eval.report_data import report_data
+from robofollow.eval.reports.report import write_report
+from robofollow.eval.reports.report_data import report_data
+from robofollow.eval.running.outcomes import DID, UNTRAINED
 from tests.report_helpers import OPTIONS, fake_record
 
 PLACE = ("Use your right arm to pick up the smaller blue object and place it in the {} bowl, "

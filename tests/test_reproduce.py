@@ -12,7 +12,7 @@ import shutil
 import pytest
 
 from robofollow.cli import main
-from robofollow.eval.reproduce import sampled
+from robofollow.eval.running.reproduce import sampled
 from robofollow.provenance import FIELDS, environment
 
 pytestmark = pytest.mark.slow

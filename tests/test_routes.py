@@ -5,11 +5,11 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.compiler.grounding import ground
-from robofollow.compiler.parser import parse
-from robofollow.compiler.routes import degenerate_routes, passes_over
-from robofollow.compiler.spec_loader import load_spec
-from robofollow.compiler.world import World
+from robofollow.compiler.authoring.spec_loader import load_spec
+from robofollow.compiler.language.parser import parse
+from robofollow.compiler.planning.routes import degenerate_routes, passes_over
+from robofollow.compiler.scene.grounding import ground
+from robofollow.compiler.scene.world import World
 from tests.spec_helpers import ROUTES
 
 

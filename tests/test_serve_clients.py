@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 from websockets.sync.client import connect
 
-from robofollow.eval.serving import ServerLimits
-from robofollow.eval.tcp_client import TcpPolicy
-from robofollow.eval.tcp_server import TcpPolicyServer
-from robofollow.eval.websocket_client import WebsocketPolicy
-from robofollow.eval.websocket_server import PolicyServer
-from robofollow.eval.wire import packb, unpackb
+from robofollow.eval.policies.tcp_client import TcpPolicy
+from robofollow.eval.policies.websocket_client import WebsocketPolicy
+from robofollow.eval.protocols.wire import packb, unpackb
+from robofollow.eval.serving.serving import ServerLimits
+from robofollow.eval.serving.tcp_server import TcpPolicyServer
+from robofollow.eval.serving.websocket_server import PolicyServer
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES, IMAGE_HEIGHT, IMAGE_WIDTH
 from tests.server_helpers import WAIT, _array, _client, _frame, _read, served

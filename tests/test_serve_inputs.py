@@ -14,9 +14,9 @@ from websockets.sync.client import connect
 
 from robofollow.cli import main, parser
 from robofollow.cli.serve import check_host
-from robofollow.eval.tcp_server import TcpPolicyServer
-from robofollow.eval.websocket_server import PolicyServer
-from robofollow.eval.wire import packb, unpackb
+from robofollow.eval.protocols.wire import packb, unpackb
+from robofollow.eval.serving.tcp_server import TcpPolicyServer
+from robofollow.eval.serving.websocket_server import PolicyServer
 from robofollow.sim import robot
 from robofollow.sim.objects import SHAPE
 from tests.server_helpers import WAIT, _array, _client, _frame, _read, served

@@ -8,8 +8,8 @@ import pickle
 
 import pytest
 
-from robofollow.compiler.goals import scoring_nodes
-from robofollow.compiler.profile import DEFAULT_PROFILE
+from robofollow.compiler.planning.goals import scoring_nodes
+from robofollow.compiler.planning.profile import DEFAULT_PROFILE
 from tests.sim_helpers import benchmark
 
 

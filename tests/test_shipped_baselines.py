@@ -13,9 +13,9 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.compiler.spec import LEVELS
-from robofollow.eval.reproduce import reproduce
-from robofollow.eval.saved_run import load_records
+from robofollow.compiler.scene.spec import LEVELS
+from robofollow.eval.running.reproduce import reproduce
+from robofollow.eval.running.saved_run import load_records
 from tests.sim_helpers import cached_benchmark
 
 pytestmark = pytest.mark.slow

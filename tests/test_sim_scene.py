@@ -6,8 +6,8 @@ import mujoco
 import numpy as np
 import pytest
 
-from robofollow.compiler import workspace
-from robofollow.compiler.spec_loader import load_spec
+from robofollow.compiler.authoring.spec_loader import load_spec
+from robofollow.compiler.scene import workspace
 from robofollow.errors import SpecErrors
 from robofollow.scoring import score_recording
 from robofollow.sim import robot

@@ -6,7 +6,7 @@ from pathlib import Path
 import pytest
 
 from robofollow.benchmark.pipeline import compile_specs
-from robofollow.compiler.spec_loader import load_spec
+from robofollow.compiler.authoring.spec_loader import load_spec
 from robofollow.errors import SpecErrors
 from tests.spec_helpers import VALID, edit
 

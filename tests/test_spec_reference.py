@@ -18,10 +18,12 @@ from lark import Lark
 
 from robofollow.audit.task_list import FINDING_KINDS
 from robofollow.cli import parser as cli_parser
-from robofollow.compiler import lf, spec, spec_loader, spec_splits, workspace
-from robofollow.compiler.spec_loader import load_partial
-from robofollow.compiler.task_rules import _GROUNDED_RULES
-from robofollow.compiler.wordings import GENERATORS
+from robofollow.compiler.authoring import spec_loader, spec_splits
+from robofollow.compiler.authoring.spec_loader import load_partial
+from robofollow.compiler.language import lf
+from robofollow.compiler.scene import spec, workspace
+from robofollow.compiler.splits.task_rules import _GROUNDED_RULES
+from robofollow.compiler.splits.wordings import GENERATORS
 from robofollow.resources import grammar_text
 
 DOC = Path(__file__).resolve().parent.parent / "docs" / "spec-language.md"

@@ -14,12 +14,12 @@ from hypothesis import strategies as st
 from robofollow.audit.splits import FINDING_KEYS, findings, task_findings
 from robofollow.benchmark.pipeline import compile_specs
 from robofollow.benchmark.rounds import all_episodes
-from robofollow.compiler.behaviour import Step
-from robofollow.compiler.motions import Repertoire
-from robofollow.compiler.observation import same_observation
-from robofollow.compiler.routes import ROUTE_BAND, degenerate_routes
-from robofollow.compiler.spec import Body, Layout, Placed, Scene
-from robofollow.compiler.world import World
+from robofollow.compiler.planning.motions import Repertoire
+from robofollow.compiler.planning.routes import ROUTE_BAND, degenerate_routes
+from robofollow.compiler.scene.behaviour import Step
+from robofollow.compiler.scene.observation import same_observation
+from robofollow.compiler.scene.spec import Body, Layout, Placed, Scene
+from robofollow.compiler.scene.world import World
 from robofollow.errors import SpecErrors
 from tests.spec_helpers import VALID
 from tests.strategies import rich_specs, route_geometry, several_scenes, small_specs

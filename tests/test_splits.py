@@ -4,15 +4,15 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.compiler import lf
-from robofollow.compiler.motions import COMPOSING_LEVELS, Repertoire
-from robofollow.compiler.parser import parse
-from robofollow.compiler.routes import passes_over
-from robofollow.compiler.spec_loader import load_spec
-from robofollow.compiler.splits import episode_seed, generate
-from robofollow.compiler.training import check_training
-from robofollow.compiler.wordings import concepts
-from robofollow.compiler.world import World
+from robofollow.compiler.authoring.spec_loader import load_spec
+from robofollow.compiler.language import lf
+from robofollow.compiler.language.parser import parse
+from robofollow.compiler.planning.motions import COMPOSING_LEVELS, Repertoire
+from robofollow.compiler.planning.routes import passes_over
+from robofollow.compiler.scene.world import World
+from robofollow.compiler.splits.generator import episode_seed, generate
+from robofollow.compiler.splits.training import check_training
+from robofollow.compiler.splits.wordings import concepts
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
 # the upstream benchmark's tasks per level, but Scene 1's L3: its training instructions say

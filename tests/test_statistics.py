@@ -11,10 +11,12 @@ import numpy as np
 import pytest
 
 from robofollow.cli import main
-from robofollow.eval.compare import compare_runs, markdown, pair
-from robofollow.eval.scores import write_scores
-from robofollow.oracle.intervals import holm, paired_test
-from robofollow.oracle.metrics import task_intervals, wilson
+from robofollow.eval.reports.comparison import compare_runs, run_scores
+from robofollow.eval.reports.comparison_page import markdown
+from robofollow.eval.running.scores import write_scores
+from robofollow.eval.statistics.intervals import holm, paired_test
+from robofollow.eval.statistics.metrics import task_intervals, wilson
+from robofollow.eval.statistics.paired import pair
 
 SCENES, LEVELS, TASKS, ROUNDS = ("scene1", "scene2"), ("L0", "L1", "L2", "L3"), 10, 3
 
@@ -171,27 +173,27 @@ def _pilot(tmp_path, name, between, within, tasks=40, rounds=10, seed=0):
 
 def test_the_power_plan_needs_more_rounds_for_smaller_differences_and_more_tasks_past_a_floor(
         tmp_path):
-    from robofollow.eval.power import plan
+    from robofollow.eval.statistics.power import plan
 
     pilot = _pilot(tmp_path, "pilot", between=0.02, within=0.2)
-    (entry,) = plan([pilot], 10.0)
+    (entry,) = plan([run_scores(pilot)], 10.0)
     assert entry["tasks"] == 40 and entry["pilot_rounds"] == 10
     assert 15 < entry["within_sd"] < 25 and entry["between_sd"] < 5
-    (smaller,) = plan([pilot], 5.0)
+    (smaller,) = plan([run_scores(pilot)], 5.0)
     assert smaller["rounds"] > entry["rounds"] >= 1
     spread = _pilot(tmp_path, "spread", between=0.3, within=0.05)  # tasks differ a lot
-    (far,) = plan([spread], 5.0)
+    (far,) = plan([run_scores(spread)], 5.0)
     assert far["rounds"] is None and far["tasks_needed"] > 40
 
 
 def test_the_planned_rounds_give_about_the_planned_power(tmp_path):
     """Simulated paired comparisons at the planned rounds detect the planned difference about
     80% of the time (the sign-flip test over tasks, 5% two-sided)."""
-    from robofollow.eval.power import plan
+    from robofollow.eval.statistics.power import plan
 
     rng = np.random.default_rng(11)
     tasks, between, within, delta = 30, 0.03, 0.25, 0.08
-    (entry,) = plan([_pilot(tmp_path, "pilot", between, within, tasks, 10, seed=3)],
+    (entry,) = plan([run_scores(_pilot(tmp_path, "pilot", between, within, tasks, 10, seed=3))],
                     100 * delta)
     rounds = entry["rounds"]
     detected = 0

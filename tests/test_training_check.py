@@ -5,8 +5,8 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.compiler.spec_loader import load_spec
-from robofollow.compiler.training import check_training, describe
+from robofollow.compiler.authoring.spec_loader import load_spec
+from robofollow.compiler.splits.training import check_training, describe
 from robofollow.errors import SpecErrors
 from tests.spec_helpers import edit, route_task, routes_with
 

@@ -5,9 +5,9 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.compiler import lf
-from robofollow.compiler.notation import notation
-from robofollow.compiler.parser import parse
+from robofollow.compiler.language import lf
+from robofollow.compiler.language.notation import notation
+from robofollow.compiler.language.parser import parse
 
 TASKS = json.loads((Path(__file__).parent / "data" / "training_instructions.json").read_text())
 PARAPHRASES = [(task["label"], index, text) for task in TASKS

@@ -1,5 +1,5 @@
 """Every shipped L2/L3 wording reads as it is scored, checked here independently of the
-generator and of compiler/wording_rules.py: adjectives in English order (superlative or
+generator and of compiler/splits/wording_rules.py: adjectives in English order (superlative or
 ordinal, then size, then colour), every comparison made among at least two bodies (counted
 from the layout's bodies by kind and colour), and a superlative after the noun ('the blue cube
 that is rightmost') naming the body that is also the superlative of all bodies of the noun."""
@@ -12,8 +12,8 @@ import pytest
 from pydantic import BaseModel
 
 from robofollow.benchmark.pipeline import compile_specs
-from robofollow.compiler import lf
-from robofollow.compiler.world import World
+from robofollow.compiler.language import lf
+from robofollow.compiler.scene.world import World
 from robofollow.resources import builtin_specs
 
 COLOURS = "red|green|blue|yellow|orange|purple|pink|white|black|gray|grey|brown"

@@ -19,10 +19,10 @@ except ImportError as missing:  # a failure, not a skip: the adapter is tested i
 
 from robofollow.benchmark.pipeline import compile_specs
 from robofollow.benchmark.rounds import find_episode
-from robofollow.eval.chance import references
-from robofollow.eval.episode import run_episode
-from robofollow.eval.reference import ExpertPolicy
-from robofollow.eval.runner import result_record
+from robofollow.eval.policies.reference import ExpertPolicy
+from robofollow.eval.running.chance import references
+from robofollow.eval.running.episode import run_episode
+from robofollow.eval.running.runner import result_record
 from robofollow.integrations.vla_eval import RoboFollowBenchmark, robofollow_table
 from robofollow.resources import builtin_specs
 from robofollow.sim.stage import Stage

@@ -12,8 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from robofollow.cli import main
-from robofollow.compiler import lf
-from robofollow.compiler.world import EXTREME_MARGIN, World, sample_offsets
+from robofollow.compiler.language import lf
+from robofollow.compiler.scene.world import EXTREME_MARGIN, World, sample_offsets
 from robofollow.resources import builtin_specs
 from robofollow.vqa.paper import QA20, answer_all
 from robofollow.vqa.questions import (

@@ -11,7 +11,7 @@ from robofollow.audit.splits import findings
 from robofollow.benchmark.pipeline import compile_specs
 from robofollow.benchmark.rounds import all_episodes
 from robofollow.benchmark.summary import summary
-from robofollow.eval.verify import run_expert_episodes
+from robofollow.eval.running.verify import run_expert_episodes
 from robofollow.resources import builtin_specs
 
 README = Path(__file__).resolve().parent.parent / "README.md"

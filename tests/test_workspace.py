@@ -1,4 +1,4 @@
-"""The arm workspace model (compiler/workspace.py) against the simulated arm's IK: a point the
+"""The arm workspace model (compiler/scene/workspace.py) against the simulated arm's IK: a point the
 model calls reachable is reached; one well beyond its reach is not."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from robofollow.compiler import workspace
+from robofollow.compiler.scene import workspace
 from robofollow.sim.expert import REACH_SEED, Expert
 from robofollow.sim.ik import top_down
 from robofollow.sim.simulation import Simulation

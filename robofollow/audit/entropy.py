@@ -21,11 +21,11 @@ from __future__ import annotations
 
 import math
 
-from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.motions import differences, motion
-from robofollow.compiler.observation import same_observation
-from robofollow.compiler.spec import Spec
-from robofollow.compiler.world import World
+from robofollow.compiler.planning.motions import differences, motion
+from robofollow.compiler.scene.behaviour import Behaviour
+from robofollow.compiler.scene.observation import same_observation
+from robofollow.compiler.scene.spec import Spec
+from robofollow.compiler.scene.world import World
 
 
 def _jitter(spec: Spec, scene_id: str, layout: str) -> list:

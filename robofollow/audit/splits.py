@@ -2,7 +2,7 @@
 
 - scene entropy H(T|S) over the training groups;
 - every compiled test task re-examined by the rules the generator applies to its candidates
-  (compiler/task_rules.py: leakage, level, repertoire, route, feasibility, duplicates,
+  (compiler/splits/task_rules.py: leakage, level, repertoire, route, feasibility, duplicates,
   ambiguity at the nominal positions and the jitter extremes, truthful wording), each scene
   against its own spec, so a fresh build audits clean by construction and a hand-edited or
   foreign one shows what is wrong (a task the generator itself examined and kept is not
@@ -18,14 +18,14 @@ from robofollow.audit.entropy import (
     same_behaviours,
     scene_groups,
 )
-from robofollow.compiler import lf
-from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.grounding import Grounder, instability
-from robofollow.compiler.spec import Spec
-from robofollow.compiler.split_report import rule_report
-from robofollow.compiler.splits import Splits, TestTask
-from robofollow.compiler.task_rules import TaskRules, arms_of
-from robofollow.compiler.world import jitter_worlds
+from robofollow.compiler.language import lf
+from robofollow.compiler.scene.behaviour import Behaviour
+from robofollow.compiler.scene.grounding import Grounder, instability
+from robofollow.compiler.scene.spec import Spec
+from robofollow.compiler.scene.world import jitter_worlds
+from robofollow.compiler.splits.generator import Splits, TestTask
+from robofollow.compiler.splits.split_report import rule_report
+from robofollow.compiler.splits.task_rules import TaskRules, arms_of
 
 # the audit's finding lists, by the rule kinds that fill them
 FINDING_LISTS = {"leakage": ("leakage",), "level_inconsistencies": ("level",),

@@ -31,14 +31,14 @@ from dataclasses import dataclass
 
 from pydantic import ValidationError, create_model
 
-from robofollow.compiler import lf
-from robofollow.compiler.behaviour import Behaviour, Step, describe
-from robofollow.compiler.model import Model
-from robofollow.compiler.parser import parse
-from robofollow.compiler.spec import LEVELS, Spec
-from robofollow.compiler.spec_files import Sources, spec_error
-from robofollow.compiler.splits import TestTask
-from robofollow.compiler.task_rules import TaskRules
+from robofollow.compiler.authoring.spec_files import Sources, spec_error
+from robofollow.compiler.language import lf
+from robofollow.compiler.language.parser import parse
+from robofollow.compiler.scene.behaviour import Behaviour, Step, describe
+from robofollow.compiler.scene.model import Model
+from robofollow.compiler.scene.spec import LEVELS, Spec
+from robofollow.compiler.splits.generator import TestTask
+from robofollow.compiler.splits.task_rules import TaskRules
 from robofollow.errors import InstructionError, RoboFollowError, SpecError
 from robofollow.files import json_lines, read_file_at_most
 

@@ -11,10 +11,10 @@ from typing import Literal, Protocol
 
 from pydantic import ConfigDict, Field
 
-from robofollow.compiler import lf
-from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.model import Model
-from robofollow.compiler.spec import Level, Spec
+from robofollow.compiler.language import lf
+from robofollow.compiler.scene.behaviour import Behaviour
+from robofollow.compiler.scene.model import Model
+from robofollow.compiler.scene.spec import Level, Spec
 
 
 class EpisodeSetup(Model):

@@ -10,10 +10,10 @@ from __future__ import annotations
 from collections import defaultdict
 from collections.abc import Iterable, Mapping
 
-from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.spec import LEVELS, Spec, scene_behaviours
-from robofollow.compiler.splits import TestTask
-from robofollow.compiler.world import World
+from robofollow.compiler.scene.behaviour import Behaviour
+from robofollow.compiler.scene.spec import LEVELS, Spec, scene_behaviours
+from robofollow.compiler.scene.world import World
+from robofollow.compiler.splits.generator import TestTask
 from robofollow.oracle.chance import available_behaviours, best_guess
 
 

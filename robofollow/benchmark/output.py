@@ -23,11 +23,11 @@ from pathlib import Path
 from robofollow.benchmark.pipeline import Compiled
 from robofollow.benchmark.rounds import episode_lines
 from robofollow.benchmark.summary import changes, summary
-from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.goals import goal_graph, graph_to_dict
-from robofollow.compiler.plans import plan
-from robofollow.compiler.spec import LEVELS, Scene
-from robofollow.compiler.world import World
+from robofollow.compiler.planning.goals import goal_graph, graph_to_dict
+from robofollow.compiler.planning.plans import plan
+from robofollow.compiler.scene.behaviour import Behaviour
+from robofollow.compiler.scene.spec import LEVELS, Scene
+from robofollow.compiler.scene.world import World
 from robofollow.errors import RoboFollowError
 from robofollow.files import json_line, json_lines
 

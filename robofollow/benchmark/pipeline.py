@@ -14,12 +14,12 @@ from types import MappingProxyType
 from robofollow.audit.splits import audit, findings
 from robofollow.audit.task_list import listed_tests
 from robofollow.benchmark.guessing import blind_best
-from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.spec import Spec, scene_behaviours
-from robofollow.compiler.spec_files import spec_files
-from robofollow.compiler.spec_loader import load_partial
-from robofollow.compiler.splits import Splits, generate_examined
-from robofollow.compiler.training import training_behaviours
+from robofollow.compiler.authoring.spec_files import spec_files
+from robofollow.compiler.authoring.spec_loader import load_partial
+from robofollow.compiler.scene.behaviour import Behaviour
+from robofollow.compiler.scene.spec import Spec, scene_behaviours
+from robofollow.compiler.splits.generator import Splits, generate_examined
+from robofollow.compiler.splits.training import training_behaviours
 from robofollow.errors import SpecErrors
 
 

@@ -9,8 +9,8 @@ from collections.abc import Iterator
 
 from robofollow.benchmark.episode import Episode
 from robofollow.benchmark.pipeline import Compiled
-from robofollow.compiler.spec import LEVELS, SplitRule
-from robofollow.compiler.splits import TestTask, episode_seed
+from robofollow.compiler.scene.spec import LEVELS, SplitRule
+from robofollow.compiler.splits.generator import TestTask, episode_seed
 from robofollow.errors import RoboFollowError
 from robofollow.files import json_line_of, json_value
 

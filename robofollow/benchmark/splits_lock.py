@@ -10,7 +10,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from robofollow.benchmark.pipeline import Compiled
-from robofollow.compiler.spec import LEVELS
+from robofollow.compiler.scene.spec import LEVELS
 from robofollow.errors import RoboFollowError
 from robofollow.files import write_json_atomic
 

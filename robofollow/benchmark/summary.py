@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from robofollow.audit.splits import FINDING_KEYS
 from robofollow.benchmark.pipeline import Compiled
-from robofollow.compiler.spec import LEVELS, MOTION_LEVELS
+from robofollow.compiler.scene.spec import LEVELS, MOTION_LEVELS
 from robofollow.errors import counted
 
 

@@ -41,7 +41,12 @@ def add_compile(commands) -> None:
 def cmd_compile(args) -> int:
     from robofollow.benchmark.output import check_out, write
     from robofollow.benchmark.pipeline import clean, compile_specs
-    from robofollow.benchmark.splits_lock import check_lock, lock_path, read_lock, write_lock
+    from robofollow.benchmark.splits_lock import (
+        check_lock,
+        lock_path,
+        read_lock,
+        write_lock,
+    )
     from robofollow.benchmark.summary import summary
 
     check_out(Path(args.out))  # before the work: an --out that cannot take the build is refused
@@ -82,7 +87,7 @@ def _verify(compiled, specs: Path, rounds: int, workers: int | None,
     """The expert on the first `rounds` rounds of every test task of `scenes`; failures
     listed."""
     from robofollow.benchmark.rounds import all_episodes
-    from robofollow.eval.verify import run_expert_episodes
+    from robofollow.eval.running.verify import run_expert_episodes
 
     episodes = [e for e in all_episodes(compiled) if e.round <= rounds and e.scene in scenes]
     print(f"\nverifying {', '.join(scenes)}: the expert on {counted(len(episodes), 'episode')} "

@@ -8,7 +8,13 @@ import os
 import sys
 from pathlib import Path
 
-from robofollow.cli.common import image_size, interrupted, positive, specs_argument, specs_of
+from robofollow.cli.common import (
+    image_size,
+    interrupted,
+    positive,
+    specs_argument,
+    specs_of,
+)
 from robofollow.data.jobs import DEMO_INSTRUCTIONS, FORMATS
 from robofollow.errors import RoboFollowError
 

@@ -19,11 +19,11 @@ from robofollow.cli.common import (
     specs_of,
     specs_option,
 )
-from robofollow.compiler.spec import LEVELS, MOTION_LEVELS, ROUNDS
+from robofollow.compiler.scene.spec import LEVELS, MOTION_LEVELS, ROUNDS
 from robofollow.errors import RoboFollowError, UsageError
-from robofollow.eval.deadline import DEFAULT_POLICY_TIMEOUT
-from robofollow.eval.limits import CALL_TIMEOUT_S, MAX_MESSAGE_BYTES
-from robofollow.eval.modes import EXPORTS, INSTRUCTION_MODES, VIDEO_MODES
+from robofollow.eval.protocols.limits import CALL_TIMEOUT_S, MAX_MESSAGE_BYTES
+from robofollow.eval.running.deadline import DEFAULT_POLICY_TIMEOUT
+from robofollow.eval.running.modes import EXPORTS, INSTRUCTION_MODES, VIDEO_MODES
 from robofollow.sim import CHUNK
 from robofollow.workers import EXECUTORS
 
@@ -115,20 +115,20 @@ def add_eval(commands) -> None:
 
 def cmd_eval(args) -> int:
     from robofollow.compiled_cache import load
-    from robofollow.compiler.spec_loader import load_spec
-    from robofollow.eval.compare import CONTROLS, control_comparisons
-    from robofollow.eval.loading import check_policy, with_privileged
-    from robofollow.eval.policy_kind import is_server
-    from robofollow.eval.report import write_report
-    from robofollow.eval.run_folder import check_prepare
-    from robofollow.eval.runner import (
+    from robofollow.compiler.authoring.spec_loader import load_spec
+    from robofollow.eval.policies.loading import check_policy, with_privileged
+    from robofollow.eval.policies.policy_kind import is_server
+    from robofollow.eval.reports.comparison import control_comparisons
+    from robofollow.eval.reports.report import write_report
+    from robofollow.eval.reports.tables import table_text
+    from robofollow.eval.running.run_folder import CONTROLS, check_prepare
+    from robofollow.eval.running.runner import (
         EvalOptions,
         evaluate,
         failures_text,
         select_episodes,
         shard_of,
     )
-    from robofollow.eval.tables import table_text
 
     # what a typo can spoil is checked before the (slow) compile and before any file is
     # written (task ids need the compiled episodes: after the compile, before any file)
@@ -211,10 +211,10 @@ def cmd_eval(args) -> int:
 def _until_separated(compiled, options, args) -> tuple[dict, int]:
     """Rounds one at a time until the declared test separates the run from the other
     (sequential.py); the summary and the last round run."""
-    from robofollow.eval.compare import run_scores
-    from robofollow.eval.run_folder import safe_path
-    from robofollow.eval.runner import evaluate
-    from robofollow.eval.sequential import SEQUENTIAL, look, record
+    from robofollow.eval.reports.comparison import compare_runs, run_scores
+    from robofollow.eval.running.run_folder import safe_path
+    from robofollow.eval.running.runner import evaluate
+    from robofollow.eval.statistics.sequential import SEQUENTIAL, look, record
     from robofollow.files import write_json_atomic
 
     other = Path(args.until_separated)
@@ -225,7 +225,7 @@ def _until_separated(compiled, options, args) -> tuple[dict, int]:
                           args.resume or round_index > 1, progress=not args.quiet,
                           executor=args.executor, drop_corrupt=args.drop_corrupt,
                           up_to_round=round_index)
-        taken = look(out, other, round_index, options.rounds)
+        taken = look(compare_runs(out, other)["rows"], round_index, options.rounds)
         print(f"after round {round_index}: average Intent {taken.difference:+.1f} against "
               f"{other.name}, p = {taken.p:.3g} (separated below {taken.threshold:.3g})",
               file=sys.stderr)
@@ -288,14 +288,14 @@ def add_report(commands) -> None:
 
 
 def cmd_report(args) -> int:
-    from robofollow.eval.compare import environment_warnings
-    from robofollow.eval.report import (
+    from robofollow.eval.reports.comparison import environment_warnings
+    from robofollow.eval.reports.report import (
         compare_reports,
         comparison_markdown,
         write_comparison,
         write_report,
     )
-    from robofollow.eval.run_folder import check_folder_out, write_text_file
+    from robofollow.eval.running.run_folder import check_folder_out, write_text_file
 
     runs = [Path(run) for run in args.runs]
     if len(runs) == 1 and args.out:
@@ -327,10 +327,10 @@ def cmd_report(args) -> int:
 
 
 def _export(run: Path, kind: str) -> Path:
-    from robofollow.eval.export import table1_csv, table1_latex
-    from robofollow.eval.run_folder import safe_path, write_text_file
-    from robofollow.eval.runner import summary
-    from robofollow.eval.saved_run import load_run
+    from robofollow.eval.reports.export import table1_csv, table1_latex
+    from robofollow.eval.running.run_folder import safe_path, write_text_file
+    from robofollow.eval.running.runner import summary
+    from robofollow.eval.running.saved_run import load_run
 
     options, results = load_run(run)
     found = summary(results, options)
@@ -359,10 +359,13 @@ def add_merge(commands) -> None:
 
 def cmd_merge(args) -> int:
     from robofollow.compiled_cache import load
-    from robofollow.eval.merge import merge
-    from robofollow.eval.tables import table_text
+    from robofollow.eval.reports.report import write_report
+    from robofollow.eval.reports.tables import table_text
+    from robofollow.eval.running.merge import merge
 
-    result = merge(load(specs_of(args)), [Path(s) for s in args.shards], Path(args.out))
+    result, folders = merge(load(specs_of(args)), [Path(s) for s in args.shards], Path(args.out))
+    for folder in folders:
+        write_report(folder)
     print(f"merged {len(args.shards)} shards into {args.out} ({result['episodes']} episodes):")
     print(table_text(result))
     return 0
@@ -396,10 +399,9 @@ def add_compare(commands) -> None:
 
 
 def cmd_compare(args) -> int:
-    from robofollow.eval.compare import (
-        compare_runs,
+    from robofollow.eval.reports.comparison import compare_runs, environment_warnings
+    from robofollow.eval.reports.comparison_page import (
         comparison_folders,
-        environment_warnings,
         markdown,
         write_comparison_files,
     )
@@ -429,7 +431,8 @@ def cmd_compare(args) -> int:
 
 
 def _plan(runs: list[Path], args) -> int:
-    from robofollow.eval.power import plan, plan_markdown
+    from robofollow.eval.reports.comparison import run_scores
+    from robofollow.eval.statistics.power import plan, plan_markdown
 
     if len(runs) > 2:
         raise UsageError("--power plans from one pilot run, or two (their paired "
@@ -438,9 +441,9 @@ def _plan(runs: list[Path], args) -> int:
         raise UsageError("--out writes a comparison's files; --power prints a plan "
                          "(--json prints it as JSON)")
     metric = args.metric or "IS"
-    entries = plan(runs, args.power, metric)
+    entries = plan([run_scores(run) for run in runs], args.power, metric)
     print(json.dumps(entries, indent=2) if args.json else
-          plan_markdown(runs, args.power, metric, entries))
+          plan_markdown([run.name for run in runs], args.power, metric, entries))
     return 0
 
 
@@ -449,8 +452,8 @@ def _motions(run: Path, args) -> dict[str, str | None]:
     before they did), from the compiled episodes of the specs when they are the run's; else
     none (their motion is unknown)."""
     from robofollow.compiled_cache import load
-    from robofollow.compiler.spec_loader import load_spec
-    from robofollow.eval.saved_run import load_run
+    from robofollow.compiler.authoring.spec_loader import load_spec
+    from robofollow.eval.running.saved_run import load_run
 
     options, results = load_run(run)
     missing = [r["episode"] for r in results if "motion" not in r and r["level"] in MOTION_LEVELS]

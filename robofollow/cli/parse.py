@@ -6,9 +6,9 @@ import argparse
 import io
 import sys
 
-from robofollow.compiler import lf
-from robofollow.compiler.notation import notation
-from robofollow.compiler.realize import STYLES, realize
+from robofollow.compiler.language import lf
+from robofollow.compiler.language.notation import notation
+from robofollow.compiler.language.realize import STYLES, realize
 from robofollow.errors import InstructionError
 from robofollow.files import json_line
 
@@ -40,7 +40,9 @@ def add_parse(commands) -> None:
 
 
 def _parse_one(text: str, args) -> int:
-    from robofollow.compiler.parser import parse  # (lark: only for this command)
+    from robofollow.compiler.language.parser import (
+        parse,  # (lark: only for this command)
+    )
 
     try:
         instruction = parse(text)
@@ -57,7 +59,7 @@ def _parse_one(text: str, args) -> int:
 
 def _parse_stream(stream, out) -> int:
     """One output record per input line, blank lines included (an 'empty' error)."""
-    from robofollow.compiler.parser import parse
+    from robofollow.compiler.language.parser import parse
 
     status = 0
     for line in stream:

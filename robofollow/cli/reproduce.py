@@ -38,9 +38,9 @@ def add_reproduce(commands) -> None:
 def cmd_reproduce(args) -> int:
     from robofollow.compiled_cache import load
     from robofollow.errors import RoboFollowError, UsageError
-    from robofollow.eval.loading import check_policy
-    from robofollow.eval.reproduce import DEFAULT_EPISODES, reproduce
-    from robofollow.eval.saved_run import load_options
+    from robofollow.eval.policies.loading import check_policy
+    from robofollow.eval.running.reproduce import DEFAULT_EPISODES, reproduce
+    from robofollow.eval.running.saved_run import load_options
 
     if args.episode and args.episodes:
         raise UsageError("--episode names the episodes; --episodes picks that many: give one")

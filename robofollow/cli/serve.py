@@ -8,7 +8,12 @@ import sys
 
 from robofollow.cli.common import positive, seconds, specs_of, specs_option
 from robofollow.errors import RoboFollowError, UsageError
-from robofollow.eval.limits import DEFAULT_HOST, IDLE_TIMEOUT_S, MAX_CLIENTS, MAX_MESSAGE_BYTES
+from robofollow.eval.protocols.limits import (
+    DEFAULT_HOST,
+    IDLE_TIMEOUT_S,
+    MAX_CLIENTS,
+    MAX_MESSAGE_BYTES,
+)
 
 MAX_PORT = 65535
 LOCAL_NAME = "localhost"  # the one host name taken for this machine; others may resolve anywhere
@@ -98,9 +103,9 @@ def cmd_serve(args) -> int:
     import logging
 
     from robofollow.compiled_cache import load
-    from robofollow.eval.serving import ServerLimits
-    from robofollow.eval.tcp_server import TcpPolicyServer
-    from robofollow.eval.websocket_server import PolicyServer
+    from robofollow.eval.serving.serving import ServerLimits
+    from robofollow.eval.serving.tcp_server import TcpPolicyServer
+    from robofollow.eval.serving.websocket_server import PolicyServer
 
     server_class, scheme = ((TcpPolicyServer, "tcp") if args.protocol == "tcp"
                             else (PolicyServer, "ws"))

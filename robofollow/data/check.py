@@ -12,72 +12,41 @@ frames and compared). HDF5: info, index and each file's arrays and attributes.
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
 from pathlib import Path
 
-import av
 import h5py
 import numpy as np
 import pyarrow as pa
-import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
+from robofollow.data.check_parts import (
+    TIME_TOLERANCE,
+    WIDTH,
+    Report,
+    check_frames,
+    check_info,
+    check_sequence,
+    check_stats,
+    check_stored,
+    check_totals,
+    check_video,
+    load_json,
+    load_jsonl,
+    read_parquets,
+    read_tasks,
+    vector_widths,
+)
 from robofollow.data.lerobot import VIDEO_KEYS
-from robofollow.data.stats import BINS, QUANTILE_KEYS, array_stats
-from robofollow.files import json_lines
-from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
 from robofollow.sim.objects import FLAT as OBJECTS_WIDTH
-from robofollow.sim.video import probe
-
-WIDTH = len(robot.JOINT_NAMES)
-VECTOR_FEATURES = {"observation.state": WIDTH, "action": WIDTH}  # every dataset has them
-# where a dataset declares it: the objects observation, flattened
-OPTIONAL_VECTORS = {"observation.environment_state": OBJECTS_WIDTH}
-SCALAR_FEATURES = {"timestamp": "float32", "frame_index": "int64", "episode_index": "int64",
-                   "index": "int64", "task_index": "int64"}
-STATS_TOLERANCE = 1e-4  # absolute, on recomputed state/action statistics
-TIME_TOLERANCE = 1e-4  # s
-
-
-@dataclass
-class Report:
-    format: str = "unknown"
-    episodes: int = 0
-    frames: int = 0
-    errors: list[str] = field(default_factory=list)
-    notes: list[str] = field(default_factory=list)  # worth knowing, not a problem
-
-    def error(self, where: str, message: str) -> None:
-        self.errors.append(f"{where}: {message}")
-
-    def note(self, message: str) -> None:
-        if message not in self.notes:
-            self.notes.append(message)
-
-    @property
-    def ok(self) -> bool:
-        return not self.errors
-
-    def to_dict(self) -> dict:
-        return {"format": self.format, "episodes": self.episodes, "frames": self.frames,
-                "ok": self.ok, "errors": self.errors, "notes": self.notes}
-
-    def render(self, limit: int = 50) -> str:
-        head = (f"{self.format} dataset: {self.episodes} episodes, {self.frames} frames: "
-                + ("valid" if self.ok else f"{len(self.errors)} problem(s)"))
-        lines = [head] + [f"  - {e}" for e in self.errors[:limit]] + [
-            f"  note: {n}" for n in self.notes]
-        if len(self.errors) > limit:
-            lines.append(f"  ... and {len(self.errors) - limit} more (--json lists all)")
-        return "\n".join(lines)
 
 
 def check(root: Path) -> Report:
+    """The dataset at `root` checked against its format's rules (LeRobot v2.1 / v3.0, HDF5)."""
     report = Report()
     if (root / "meta" / "info.json").is_file():
-        info = _load_json(root / "meta" / "info.json", report)
+        info = load_json(root / "meta" / "info.json", report)
         version = info.get("codebase_version") if info else None
         report.format = f"lerobot-{version}"
         if version == lerobot_v21.VERSION:
@@ -88,7 +57,7 @@ def check(root: Path) -> Report:
             report.error("meta/info.json", f"codebase_version {version!r} is not v2.1 or v3.0")
     elif (root / "info.json").is_file():
         report.format = "hdf5"
-        info = _load_json(root / "info.json", report)
+        info = load_json(root / "info.json", report)
         if info is not None:
             _check_hdf5(root, info, report)
     else:
@@ -96,242 +65,25 @@ def check(root: Path) -> Report:
     return report
 
 
-def _load_json(path: Path, report: Report):
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as error:
-        report.error(path.name, f"unreadable: {error}")
-        return None
-
-
-def _load_jsonl(path: Path, report: Report) -> list[dict]:
-    try:
-        data = path.read_bytes()
-    except OSError as error:
-        report.error(path.name, f"unreadable: {error}")
-        return []
-    records = []
-    for line in json_lines(data):
-        if line.problem:
-            report.error(f"{path.name}:{line.number}:{line.column}", line.problem)
-        else:
-            records.append(line.value)
-    return records
-
-
 # -- LeRobot, shared -------------------------------------------------------------------------
-
-def vector_widths(features: dict) -> dict[str, int]:
-    """The vector features a dataset holds, with their widths: state and action, and the
-    optional ones its info declares."""
-    return {**VECTOR_FEATURES, **{key: width for key, width in OPTIONAL_VECTORS.items()
-                                  if key in features}}
-
-
-def _check_info(info: dict, report: Report, required: tuple[str, ...]) -> dict:
-    """The feature schema and top-level fields; returns the features (or {})."""
-    for key in ("robot_type", "fps", "total_episodes", "total_frames", "total_tasks",
-                "data_path", "features") + required:
-        if key not in info:
-            report.error("meta/info.json", f"missing {key!r}")
-    fps = info.get("fps")
-    if not isinstance(fps, int | float) or fps <= 0:
-        report.error("meta/info.json", f"fps must be a positive number, got {fps!r}")
-    features = info.get("features", {})
-    for key, width in vector_widths(features).items():
-        feature = features.get(key)
-        if feature is None:
-            report.error("meta/info.json", f"feature {key!r} is missing")
-        elif (feature.get("dtype"), list(feature.get("shape", []))) != ("float32", [width]):
-            report.error("meta/info.json", f"{key} must be float32 [{width}], got "
-                         f"{feature.get('dtype')} {feature.get('shape')}")
-        elif feature.get("names") and len(feature["names"]) != width:
-            report.error("meta/info.json", f"{key} has {len(feature['names'])} names for "
-                         f"{width} values")
-    for key, dtype in SCALAR_FEATURES.items():
-        if features.get(key, {}).get("dtype") != dtype:
-            report.error("meta/info.json", f"feature {key!r} must be {dtype}")
-    for key in VIDEO_KEYS:
-        feature = features.get(key, {})
-        shape = feature.get("shape", [])
-        if feature.get("dtype") != "video" or len(shape) != 3 or shape[2] != 3:
-            report.error("meta/info.json", f"{key} must be a video feature of shape [H, W, 3]")
-    return features
-
-
-def _vector_column(column: pa.ChunkedArray, width: int) -> bool:
-    """Whether a column holds `width` float32 values a row: a fixed-size list, as this project
-    and LeRobot's writer store it, or a plain list with that many values in every row, as
-    LeRobot's v2.1 -> v3.0 converter does."""
-    kind = column.type
-    if pa.types.is_fixed_size_list(kind):
-        return kind.list_size == width and kind.value_type == pa.float32()
-    if not (pa.types.is_list(kind) or pa.types.is_large_list(kind)) \
-            or kind.value_type != pa.float32() or column.null_count:
-        return False
-    lengths = pc.list_value_length(column.combine_chunks()).to_numpy()
-    return bool(np.all(lengths == width))
-
-
-def _check_frames(table: pa.Table, where: str, episode: int, length: int, start: int,
-                  task_index: int, fps: float, report: Report,
-                  vectors: dict[str, int]) -> dict[str, np.ndarray]:
-    """One episode's frames: columns, dtypes, count, indices, timestamps, finite values.
-    Returns its vector features (`vectors`: name -> width) as [N, width] arrays, where their
-    columns are of a valid type."""
-    missing = [c for c in (*vectors, *SCALAR_FEATURES) if c not in table.column_names]
-    if missing:
-        report.error(where, f"missing columns {missing}")
-        return {}
-    if table.num_rows != length:
-        report.error(where, f"{table.num_rows} frames, the episode table says {length}")
-    arrays = {}
-    for key, width in vectors.items():
-        if not _vector_column(table.column(key), width):
-            report.error(where, f"{key} is {table.schema.field(key).type}, expected "
-                         f"fixed_size_list<float>[{width}] (or a list of {width} floats a row)")
-            continue
-        arrays[key] = table.column(key).combine_chunks().flatten().to_numpy().reshape(-1, width)
-        if not np.all(np.isfinite(arrays[key])):
-            report.error(where, f"{key} has non-finite values")
-    for key, dtype in SCALAR_FEATURES.items():
-        if table.schema.field(key).type != pa.from_numpy_dtype(np.dtype(dtype)):
-            report.error(where, f"{key} is {table.schema.field(key).type}, expected {dtype}")
-    n = table.num_rows
-    frames = table.column("frame_index").to_numpy()
-    if not np.array_equal(frames, np.arange(n)):
-        report.error(where, "frame_index is not 0, 1, ... in order")
-    if not np.all(table.column("episode_index").to_numpy() == episode):
-        report.error(where, f"episode_index is not {episode} throughout")
-    if not np.array_equal(table.column("index").to_numpy(), start + np.arange(n)):
-        report.error(where, f"index is not {start}, {start + 1}, ... (global frame order)")
-    if not np.all(table.column("task_index").to_numpy() == task_index):
-        report.error(where, f"task_index is not {task_index} throughout")
-    times = table.column("timestamp").to_numpy().astype(np.float64)
-    if np.abs(times - np.arange(n) / fps).max(initial=0.0) > TIME_TOLERANCE:
-        report.error(where, f"timestamp is not frame_index / fps ({fps})")
-    return arrays
-
-
-QUANTILE_NOTE = ("the statistics have no quantiles (q01 ... q99): LeRobot's policies that "
-                 "normalise by quantiles (pi0.5) need them; LeRobot's "
-                 "augment_dataset_quantile_stats script adds them")
-
-
-def _check_stored(stats: dict, where: str, report: Report, quantiles_expected: bool,
-                  vectors: dict[str, int]) -> list[str]:
-    """Stored statistics of state, action and images: every statistic present, state and
-    action as WIDTH values, images as 3 x 1 x 1 values in [0, 1], min <= q01 <= q10 <= q50 <=
-    q90 <= q99 <= max in every dimension. A feature's quantiles are checked when it has one
-    of them, and then all of them; a feature with none is a note where they are expected
-    (v3.0: LeRobot >= 0.4 writes them, its v2.1 converter and LeRobot 0.3.x did not). Returns
-    the features whose statistics are complete and of the right shape."""
-    usable = []
-    for key in (*vectors, *VIDEO_KEYS):
-        stored = stats.get(key)
-        if not isinstance(stored, dict):
-            report.error(where, f"no statistics for {key}")
-            continue
-        image = key in VIDEO_KEYS
-        has_quantiles = bool(set(QUANTILE_KEYS) & stored.keys())
-        if quantiles_expected and not has_quantiles:
-            report.note(QUANTILE_NOTE)
-        quantiles = QUANTILE_KEYS if has_quantiles else ()
-        names = ("min", *quantiles, "max", "mean", "std")
-        missing = [n for n in names + ("count",) if n not in stored]
-        if missing:
-            report.error(where, f"{key} statistics lack {missing}")
-            continue
-        try:
-            values = np.array([stored[n] for n in names], dtype=np.float64)
-        except (TypeError, ValueError):
-            values = np.empty(0)
-        if image and (values.shape[1:] != (3, 1, 1) or values.min() < -STATS_TOLERANCE
-                      or values.max() > 1 + STATS_TOLERANCE):
-            report.error(where, f"{key} statistics must be 3 x 1 x 1 values in [0, 1]")
-        elif not image and values.shape[1:] != (vectors[key],):
-            report.error(where, f"{key} statistics must be {vectors[key]} values each")
-        elif np.any(np.diff(values[:len(quantiles) + 2], axis=0) < -STATS_TOLERANCE):
-            report.error(where, f"{key} statistics are not ordered min <= "
-                         f"{' <= '.join(quantiles)} <= max")
-        else:
-            usable.append(key)
-    return usable
-
-
-def _check_stats(stats: dict, arrays: dict[str, np.ndarray], where: str, report: Report,
-                 quantiles_expected: bool, vectors: dict[str, int]) -> None:
-    """Stored episode statistics (`_check_stored`), state and action against the frames'
-    (`arrays`, from `_check_frames`; a quantile, where stored, within one histogram bin of its
-    recomputed estimate)."""
-    for key in _check_stored(stats, where, report, quantiles_expected, vectors):
-        if key not in arrays:  # an image, or a column _check_frames reported
-            continue
-        expected = array_stats(arrays[key])
-        bin_width = (np.asarray(expected["max"]) - expected["min"]) / BINS
-        quantiles = [q for q in QUANTILE_KEYS if q in stats[key]]  # all or none (checked)
-        for name in ("min", "max", "mean", "std", *quantiles):
-            tolerance = STATS_TOLERANCE + (bin_width if name in QUANTILE_KEYS else 0)
-            if np.any(np.abs(np.asarray(stats[key][name]) - expected[name]) > tolerance):
-                report.error(where, f"{key} {name} does not match the frames")
-        if list(np.ravel(stats[key]["count"])) != expected["count"]:
-            report.error(where, f"{key} count {stats[key]['count']} is not {expected['count']}")
-
-
-def _check_video(path: Path, feature: dict, fps: float, report: Report,
-                 where: str) -> list[float] | None:
-    """Opens, has the feature's resolution and the dataset's frame rate; its frame times (or
-    None when unusable)."""
-    if not path.is_file():
-        report.error(where, f"missing video {path.name}")
-        return None
-    try:
-        video = probe(path)
-    except (av.FFmpegError, IndexError) as error:
-        report.error(where, f"unreadable video: {error}")
-        return None
-    if abs(video.fps - fps) > 1e-3:
-        report.error(where, f"video runs at {video.fps:g} frames/s, the dataset at {fps:g}")
-    height, width = feature["shape"][:2]
-    if (video.height, video.width) != (height + height % 2, width + width % 2):
-        report.error(where, f"video is {video.width}x{video.height}, the feature says "
-                     f"{width}x{height}")
-    return video.times
-
-
-def _check_totals(info: dict, lengths: list[int], report: Report, tasks: int | None = None,
-                  where: str = "meta/info.json") -> None:
-    report.episodes, report.frames = len(lengths), sum(lengths)
-    totals = [("total_episodes", len(lengths)), ("total_frames", sum(lengths))]
-    for key, value in totals + ([("total_tasks", tasks)] if tasks is not None else []):
-        if info.get(key) != value:
-            report.error(where, f"{key} is {info.get(key)}, the dataset has {value}")
-
-
-def _check_sequence(indices: list, where: str, what: str, report: Report) -> bool:
-    if indices != list(range(len(indices))):
-        report.error(where, f"{what} are not 0 .. {len(indices) - 1} in order")
-        return False
-    return True
-
 
 # -- LeRobot v2.1 ----------------------------------------------------------------------------
 
 def _check_v21(root: Path, info: dict, report: Report) -> None:
-    features = _check_info(info, report, ("video_path", "chunks_size", "total_chunks"))
+    features = check_info(info, report, ("video_path", "chunks_size", "total_chunks"))
     vectors = vector_widths(features)
     meta = root / "meta"
-    episodes = _load_jsonl(meta / "episodes.jsonl", report)
-    tasks = _load_jsonl(meta / "tasks.jsonl", report)
+    episodes = load_jsonl(meta / "episodes.jsonl", report)
+    tasks = load_jsonl(meta / "tasks.jsonl", report)
     stats = {r.get("episode_index"): r.get("stats", {})
-             for r in _load_jsonl(meta / "episodes_stats.jsonl", report)}
-    _check_sequence([t.get("task_index") for t in tasks], "meta/tasks.jsonl", "task indices",
+             for r in load_jsonl(meta / "episodes_stats.jsonl", report)}
+    check_sequence([t.get("task_index") for t in tasks], "meta/tasks.jsonl", "task indices",
                     report)
     task_index = {t.get("task"): t.get("task_index") for t in tasks}
-    if not _check_sequence([e.get("episode_index") for e in episodes], "meta/episodes.jsonl",
+    if not check_sequence([e.get("episode_index") for e in episodes], "meta/episodes.jsonl",
                            "episode indices", report) or report.errors:
         return
-    _check_totals(info, [e["length"] for e in episodes], report, len(tasks))
+    check_totals(info, [e["length"] for e in episodes], report, len(tasks))
     fps, chunk_size, start = info["fps"], info["chunks_size"], 0
     for record in episodes:
         index, length = record["episode_index"], record["length"]
@@ -347,18 +99,18 @@ def _check_v21(root: Path, info: dict, report: Report) -> None:
             report.error(where, f"cannot read {path.relative_to(root)}: {error}")
             start += length
             continue
-        arrays = _check_frames(table, where, index, length, start,
+        arrays = check_frames(table, where, index, length, start,
                                task_index[record["tasks"][0]], fps, report, vectors)
         start += length
         if index not in stats:
             report.error(where, "no entry in episodes_stats.jsonl")
         else:
-            _check_stats(stats[index], arrays, where, report, quantiles_expected=False,
+            check_stats(stats[index], arrays, where, report, quantiles_expected=False,
                          vectors=vectors)
         for key in VIDEO_KEYS:
             video = root / info["video_path"].format(episode_chunk=chunk, video_key=key,
                                                      episode_index=index)
-            times = _check_video(video, features[key], fps, report, f"{where} {key}")
+            times = check_video(video, features[key], fps, report, f"{where} {key}")
             if times is not None and len(times) != length:
                 report.error(f"{where} {key}", f"video has {len(times)} frames, the episode "
                              f"{length}")
@@ -366,64 +118,24 @@ def _check_v21(root: Path, info: dict, report: Report) -> None:
 
 # -- LeRobot v3.0 ----------------------------------------------------------------------------
 
-def _read_parquets(folder: Path, report: Report) -> pa.Table | None:
-    files = sorted(folder.glob("chunk-*/file-*.parquet"))
-    if not files:
-        report.error(str(folder.relative_to(folder.parent.parent)), "no parquet files")
-        return None
-    return pa.concat_tables([pq.read_table(f) for f in files])
-
-
-def _read_tasks(path: Path, report: Report) -> list[dict] | None:
-    """meta/tasks.parquet as [{"task", "task_index"}], or None (reported). LeRobot writes a
-    pandas frame of task_index indexed by the task strings, the index stored as a column named
-    "task" (LeRobot >= 0.5, and this project) or "__index_level_0__" (unnamed, LeRobot 0.4.x)
-    and listed in the schema's pandas metadata (index_columns); a plain "task" column is read
-    too."""
-    where = "meta/tasks.parquet"
-    try:
-        table = pq.read_table(path)
-        metadata = table.schema.pandas_metadata
-    except (OSError, ValueError, pa.ArrowException) as error:
-        report.error(where, f"unreadable: {error}")
-        return None
-    pandas_index = metadata.get("index_columns") if isinstance(metadata, dict) else None
-    candidates = ["task", *(pandas_index if isinstance(pandas_index, list) else []),
-                  "__index_level_0__"]
-    column = next((c for c in candidates if c in table.column_names), None)
-    if column is None or "task_index" not in table.column_names:
-        report.error(where, "expected a task_index column and the task strings in a 'task' "
-                     "column or as the pandas index (index_columns in the pandas metadata, or "
-                     f"__index_level_0__); found columns {table.column_names}")
-        return None
-    tasks, indices = table.column(column), table.column("task_index")
-    text = pa.types.is_string(tasks.type) or pa.types.is_large_string(tasks.type)
-    if not (text and pa.types.is_integer(indices.type)):
-        report.error(where, f"expected string tasks and integer task_index, got {column} "
-                     f"{tasks.type} and task_index {indices.type}")
-        return None
-    return [{"task": task, "task_index": index}
-            for task, index in zip(tasks.to_pylist(), indices.to_pylist(), strict=True)]
-
-
 def _check_v30(root: Path, info: dict, report: Report) -> None:
-    features = _check_info(info, report, ("video_path", "chunks_size"))
+    features = check_info(info, report, ("video_path", "chunks_size"))
     vectors = vector_widths(features)
     meta = root / "meta"
-    tasks = _read_tasks(meta / "tasks.parquet", report)
+    tasks = read_tasks(meta / "tasks.parquet", report)
     if tasks is None:
         return
-    episodes = _read_parquets(meta / "episodes", report)
+    episodes = read_parquets(meta / "episodes", report)
     if episodes is None:
         return
     rows = episodes.to_pylist()
-    _check_sequence([t["task_index"] for t in tasks], "meta/tasks.parquet", "task indices",
+    check_sequence([t["task_index"] for t in tasks], "meta/tasks.parquet", "task indices",
                     report)
     task_index = {t["task"]: t["task_index"] for t in tasks}
-    if not _check_sequence([r["episode_index"] for r in rows], "meta/episodes",
+    if not check_sequence([r["episode_index"] for r in rows], "meta/episodes",
                            "episode indices", report) or report.errors:
         return
-    _check_totals(info, [r["length"] for r in rows], report, len(tasks))
+    check_totals(info, [r["length"] for r in rows], report, len(tasks))
     fps, data_files, video_times = info["fps"], {}, {}
     start = 0
     for row in rows:
@@ -447,21 +159,21 @@ def _check_v30(root: Path, info: dict, report: Report) -> None:
         offset = row["dataset_from_index"] - (table.column("index")[0].as_py()
                                               if table.num_rows else 0)
         frames = table.slice(max(offset, 0), length)
-        arrays = _check_frames(frames, where, index, length, start,
+        arrays = check_frames(frames, where, index, length, start,
                                task_index[row["tasks"][0]], fps, report, vectors)
         stats = {key.split("/")[1]: {} for key in row if key.startswith("stats/")}
         for key, value in row.items():
             if key.startswith("stats/") and value is not None:  # null: another row has it
                 _, feature, stat = key.split("/")
                 stats[feature][stat] = value
-        _check_stats(stats, arrays, where, report, quantiles_expected=True, vectors=vectors)
+        check_stats(stats, arrays, where, report, quantiles_expected=True, vectors=vectors)
         start += length
         for key in VIDEO_KEYS:
             video = info["video_path"].format(video_key=key,
                                               chunk_index=row[f"videos/{key}/chunk_index"],
                                               file_index=row[f"videos/{key}/file_index"])
             if video not in video_times:
-                video_times[video] = _check_video(root / video, features[key], fps, report,
+                video_times[video] = check_video(root / video, features[key], fps, report,
                                                   video)
             times = video_times[video]
             if times is None:
@@ -475,9 +187,9 @@ def _check_v30(root: Path, info: dict, report: Report) -> None:
     if not (meta / "stats.json").is_file():
         report.error("meta/stats.json", "missing")
     else:
-        stats = _load_json(meta / "stats.json", report)
+        stats = load_json(meta / "stats.json", report)
         if stats is not None:
-            _check_stored(stats if isinstance(stats, dict) else {}, "meta/stats.json", report,
+            check_stored(stats if isinstance(stats, dict) else {}, "meta/stats.json", report,
                           quantiles_expected=True, vectors=vectors)
 
 
@@ -488,8 +200,8 @@ def _check_hdf5(root: Path, info: dict, report: Report) -> None:
         report.error("info.json", f"format {info.get('format')!r} is not "
                      f"{hdf5_export.VERSION}")
         return
-    episodes = _load_jsonl(root / "episodes.jsonl", report)
-    if not _check_sequence([e.get("episode_index") for e in episodes], "episodes.jsonl",
+    episodes = load_jsonl(root / "episodes.jsonl", report)
+    if not check_sequence([e.get("episode_index") for e in episodes], "episodes.jsonl",
                            "episode indices", report):
         return
     height, width, _ = info["image_shape"]
@@ -518,4 +230,4 @@ def _check_hdf5(root: Path, info: dict, report: Report) -> None:
                     report.error(where, "instructions differ from episodes.jsonl")
         except (OSError, KeyError) as error:
             report.error(where, f"cannot read {record['file']}: {error}")
-    _check_totals(info, lengths, report, where="info.json")
+    check_totals(info, lengths, report, where="info.json")

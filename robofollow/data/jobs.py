@@ -14,7 +14,7 @@ from robofollow.errors import RoboFollowError
 
 if TYPE_CHECKING:  # the CLI reads this module's constants without loading the compiler
     from robofollow.benchmark.episode import Benchmark, EpisodeSetup
-    from robofollow.compiler.behaviour import Behaviour
+    from robofollow.compiler.scene.behaviour import Behaviour
 
 # Demonstration seeds live far above the test episodes' seeds (split seed bases are small and
 # rounds few), so no training demonstration shares a jittered start with a test episode.

@@ -20,7 +20,7 @@ import h5py
 import numpy as np
 
 from robofollow.benchmark.episode import Benchmark
-from robofollow.compiler.spec import Scene
+from robofollow.compiler.scene.spec import Scene
 from robofollow.data.jobs import MAX_ATTEMPTS, DemoJob
 from robofollow.data.sinks import ArraySink, FrameSink, VideoSink
 from robofollow.errors import RoboFollowError

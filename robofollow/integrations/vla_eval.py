@@ -65,9 +65,9 @@ class RoboFollowBenchmark(StepBenchmark):
         super().__init__()
         # Imported here, after configure_render: MuJoCo binds its GL backend when imported.
         from robofollow.compiled_cache import load
-        from robofollow.compiler.spec import LEVELS
-        from robofollow.eval.modes import INSTRUCTION_MODES
-        from robofollow.eval.runner import EvalOptions, select_episodes
+        from robofollow.compiler.scene.spec import LEVELS
+        from robofollow.eval.running.modes import INSTRUCTION_MODES
+        from robofollow.eval.running.runner import EvalOptions, select_episodes
         from robofollow.resources import builtin_specs
         from robofollow.sim import MAX_STEPS
         from robofollow.sim.stage import Stage
@@ -95,7 +95,7 @@ class RoboFollowBenchmark(StepBenchmark):
             self._rounds.setdefault(episode.task, []).append(episode)
         self._recorder = NullEpisodeRecorder()  # start_episode() sets the run's
         self._instruction, self._error, self._began = "", None, 0.0
-        self._rollout = None  # the episode in progress (robofollow.eval.episode.PolicyRollout)
+        self._rollout = None  # the episode in progress (robofollow.eval.running.episode.PolicyRollout)
 
     # -- tasks -------------------------------------------------------------------------------
 
@@ -112,9 +112,9 @@ class RoboFollowBenchmark(StepBenchmark):
     # -- one episode ---------------------------------------------------------------------------
 
     def reset(self, task: dict[str, Any]) -> Any:
-        """The episode's start, as robofollow.eval.episode.run_episode sets it up."""
-        from robofollow.eval.episode import PolicyRollout
-        from robofollow.eval.instructions import given_instruction
+        """The episode's start, as robofollow.eval.running.episode.run_episode sets it up."""
+        from robofollow.eval.running.episode import PolicyRollout
+        from robofollow.eval.running.instructions import given_instruction
 
         rounds, index = self._rounds[task["name"]], int(task.get("episode_idx", 0))
         if not 0 <= index < len(rounds):
@@ -127,7 +127,7 @@ class RoboFollowBenchmark(StepBenchmark):
         return None
 
     def step(self, action: dict[str, Any]) -> StepResult:
-        from robofollow.eval.policy import BadActionError, validate_actions
+        from robofollow.eval.policies.policy import BadActionError, validate_actions
 
         rollout = self._rollout
         rollout.queries += 1
@@ -141,7 +141,7 @@ class RoboFollowBenchmark(StepBenchmark):
 
     def make_obs(self, raw_obs: Any, task: dict[str, Any]) -> dict[str, Any]:
         """What `robofollow eval` shows an image policy, rendered once per query."""
-        from robofollow.eval.episode import observation
+        from robofollow.eval.running.episode import observation
 
         obs = observation(IMAGE_POLICY_USES, self.stage, self._instruction,
                           self._rollout.steps, None)
@@ -151,7 +151,7 @@ class RoboFollowBenchmark(StepBenchmark):
 
     def get_step_result(self, step_result: StepResult) -> dict[str, Any]:
         """The `robofollow eval` episode record, scored by the oracle, with success."""
-        from robofollow.eval.runner import episode_record
+        from robofollow.eval.running.runner import episode_record
 
         run = self._rollout.result(self._error, self._began, IMAGE_POLICY_USES)
         record = episode_record(self.compiled, self._rollout.episode, self._instruction, run)
@@ -175,11 +175,11 @@ class RoboFollowBenchmark(StepBenchmark):
 
 
 def robofollow_table(result: Mapping[str, Any]) -> dict:
-    """RoboFollow's Table 1 (IS / ES / CR per scene and level, robofollow.oracle.metrics.table)
+    """RoboFollow's Table 1 (IS / ES / CR per scene and level, robofollow.eval.statistics.metrics.table)
     over one vla-eval benchmark result (an entry of what `vla_eval.run` returns, or a
     `<name>_aggregate.json`). Episodes that vla-eval ended with an error (a lost server, a
     timeout) carry no RoboFollow scores and are left out: check the result's num_errors."""
-    from robofollow.oracle.metrics import table
+    from robofollow.eval.statistics.metrics import table
 
     return table(e["metrics"] for t in result["tasks"] for e in t["episodes"]
                  if "intent_score" in e.get("metrics", {}))

@@ -13,8 +13,8 @@ import re
 
 import numpy as np
 
-from robofollow.compiler.notation import notation
-from robofollow.compiler.parser import parse
+from robofollow.compiler.language.notation import notation
+from robofollow.compiler.language.parser import parse
 from robofollow.errors import InstructionError
 from robofollow.learn.options import OBJECTS_PREFIX
 

@@ -16,10 +16,10 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from robofollow.compiler.behaviour import Behaviour
-from robofollow.compiler.goals import scoring_nodes
-from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
-from robofollow.compiler.world import World
+from robofollow.compiler.planning.goals import scoring_nodes
+from robofollow.compiler.planning.profile import DEFAULT_PROFILE, ScoringProfile
+from robofollow.compiler.scene.behaviour import Behaviour
+from robofollow.compiler.scene.world import World
 
 Checks = tuple[list, tuple | None]  # (weight, check) of the working stages, and of the finish
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from robofollow.compiler.world import DIRECTIONS
+from robofollow.compiler.scene.world import DIRECTIONS
 from robofollow.oracle import predicates as P
 from robofollow.oracle.recording import Attempt, Recording
 from robofollow.trajectory import ARMS

@@ -26,9 +26,9 @@ from typing import Literal
 
 import numpy as np
 
-from robofollow.compiler.profile import ScoringProfile
-from robofollow.compiler.spec import Scene
-from robofollow.compiler.world import World
+from robofollow.compiler.planning.profile import ScoringProfile
+from robofollow.compiler.scene.spec import Scene
+from robofollow.compiler.scene.world import World
 from robofollow.oracle import predicates as P
 from robofollow.trajectory import ARMS, Trajectory, TrajectoryError, tilt
 

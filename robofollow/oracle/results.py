@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from robofollow.compiler.model import Model
+from robofollow.compiler.scene.model import Model
 
 
 class StageResult(Model):

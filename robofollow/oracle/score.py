@@ -12,15 +12,16 @@ from __future__ import annotations
 
 import itertools
 
-from robofollow.compiler.behaviour import Behaviour, Step, describe
-from robofollow.compiler.goals import scoring_nodes
-from robofollow.compiler.profile import DEFAULT_PROFILE, ScoringProfile
-from robofollow.compiler.spec import Scene
+from robofollow.compiler.planning.goals import scoring_nodes
+from robofollow.compiler.planning.profile import DEFAULT_PROFILE, ScoringProfile
+from robofollow.compiler.scene.behaviour import Behaviour, Step, describe
+from robofollow.compiler.scene.spec import Scene
 from robofollow.oracle.chance import passes_work
 from robofollow.oracle.instead import arms_moved, describe_actions
+from robofollow.oracle.outcome import GOING_FOR, Outcome
 from robofollow.oracle.recording import Attempt, Recording, arm_index
 from robofollow.oracle.results import EpisodeScore, ExecutedBehaviour, StageResult
-from robofollow.oracle.stages import AT_REST, EVALUATORS, GOING_FOR, Outcome
+from robofollow.oracle.stages import AT_REST, EVALUATORS
 from robofollow.trajectory import ARMS, Trajectory
 
 FULL = 0.99  # a score at least this share of its maximum counts as full credit

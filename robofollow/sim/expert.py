@@ -16,8 +16,8 @@ import math
 import mujoco
 import numpy as np
 
-from robofollow.compiler import workspace
-from robofollow.compiler.plans import Plan
+from robofollow.compiler.planning.plans import Plan
+from robofollow.compiler.scene import workspace
 from robofollow.sim import robot
 from robofollow.sim.ik import ArmIK, top_down
 from robofollow.sim.simulation import CONTROL_HZ, Simulation

@@ -16,8 +16,15 @@ from functools import lru_cache
 import jinja2
 import numpy as np
 
-from robofollow.compiler import workspace
-from robofollow.compiler.spec import BOWL_FLOOR, BOWL_SEGMENTS, BOWL_WALL, TABLE_HEIGHT, Body, Scene
+from robofollow.compiler.scene import workspace
+from robofollow.compiler.scene.spec import (
+    BOWL_FLOOR,
+    BOWL_SEGMENTS,
+    BOWL_WALL,
+    TABLE_HEIGHT,
+    Body,
+    Scene,
+)
 from robofollow.sim import robot
 from robofollow.sim.assets import ARM_MESHES, mesh_dir
 

@@ -19,7 +19,7 @@ from typing import get_args
 
 import numpy as np
 
-from robofollow.compiler.spec import BodyKind, Scene
+from robofollow.compiler.scene.spec import BodyKind, Scene
 from robofollow.errors import RoboFollowError
 from robofollow.sim.simulation import Simulation
 from robofollow.trajectory import Trajectory, yaw

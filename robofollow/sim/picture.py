@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 from PIL import Image, ImageDraw, ImageFont
 
-from robofollow.compiler.spec import Scene
+from robofollow.compiler.scene.spec import Scene
 from robofollow.sim.cameras import Cameras
 from robofollow.sim.mjcf import CAMERAS
 from robofollow.sim.simulation import Simulation

@@ -5,7 +5,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from robofollow.compiler import workspace
+from robofollow.compiler.scene import workspace
 from robofollow.sim.simulation import CONTROL_HZ, Simulation
 from robofollow.trajectory import CONTACT_EXTRAS, Trajectory
 

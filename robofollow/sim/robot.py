@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from robofollow.compiler import workspace
-from robofollow.compiler.workspace import ARMS, GRIPPER_OPENING
+from robofollow.compiler.scene import workspace
+from robofollow.compiler.scene.workspace import ARMS, GRIPPER_OPENING
 
 ARM_JOINTS = ("waist", "shoulder", "elbow", "forearm_roll", "wrist_angle", "wrist_rotate")
 

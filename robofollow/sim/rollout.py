@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from robofollow.benchmark.episode import Benchmark, EpisodeSetup
-from robofollow.compiler.plans import plan
+from robofollow.compiler.planning.plans import plan
 from robofollow.oracle.results import EpisodeScore
 from robofollow.scoring import score_recording
 from robofollow.sim import robot

@@ -13,9 +13,9 @@ from functools import lru_cache
 import mujoco
 import numpy as np
 
-from robofollow.compiler import workspace
-from robofollow.compiler.spec import Scene
-from robofollow.compiler.world import World, sample_offsets
+from robofollow.compiler.scene import workspace
+from robofollow.compiler.scene.spec import Scene
+from robofollow.compiler.scene.world import World, sample_offsets
 from robofollow.errors import RoboFollowError
 from robofollow.sim import robot
 from robofollow.sim.mjcf import SPAWN_LIFT, TIMESTEP, scene_xml

@@ -3,7 +3,7 @@ building a model and a renderer costs far more than resetting them."""
 
 from __future__ import annotations
 
-from robofollow.compiler.spec import Scene
+from robofollow.compiler.scene.spec import Scene
 from robofollow.sim.cameras import IMAGE_HEIGHT, IMAGE_WIDTH, Cameras
 from robofollow.sim.simulation import Simulation
 

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from typing import Literal
 
-from robofollow.compiler.model import Model
-from robofollow.compiler.world import World
+from robofollow.compiler.scene.model import Model
+from robofollow.compiler.scene.world import World
 
 KIND_WORDS = {"label": "square label"}  # how a body kind is said, where not by its name
 

@@ -10,11 +10,17 @@ from __future__ import annotations
 
 import math
 
-from robofollow.compiler import lf
-from robofollow.compiler.grounding import GroundingError
-from robofollow.compiler.world import EXTREME_MARGIN, World
+from robofollow.compiler.language import lf
+from robofollow.compiler.scene.grounding import GroundingError
+from robofollow.compiler.scene.world import EXTREME_MARGIN, World
 from robofollow.vqa.answers import Expected
-from robofollow.vqa.questions import Ask, Question, QuestionGrounder, expected, referents
+from robofollow.vqa.questions import (
+    Ask,
+    Question,
+    QuestionGrounder,
+    expected,
+    referents,
+)
 
 SCENE, LAYOUT = "scene2", "default"
 

@@ -13,10 +13,10 @@ import itertools
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from robofollow.compiler import lf
-from robofollow.compiler.grounding import Grounder, GroundingError
-from robofollow.compiler.model import Model
-from robofollow.compiler.world import EXTREME_MARGIN, World
+from robofollow.compiler.language import lf
+from robofollow.compiler.scene.grounding import Grounder, GroundingError
+from robofollow.compiler.scene.model import Model
+from robofollow.compiler.scene.world import EXTREME_MARGIN, World
 from robofollow.vqa.answers import KIND_WORDS, Expected, Named, named, side_words
 
 RELATION_WORDS = {"left_of": "to the left of", "right_of": "to the right of",

@@ -13,7 +13,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from robofollow.compiler.lexicon import VOCABULARY
+from robofollow.compiler.language.lexicon import VOCABULARY
 from robofollow.vqa.answers import Expected, Named
 
 SIDES = {"left": "left", "right": "right", "middle": "middle", "center": "middle",

@@ -1,0 +1,165 @@
+"""`robofollow merge`: the shards of one run (`eval --shard I/N`, e.g. the tasks of a job
+array) joined into a run like any other. The shards must be the N parts of one run (the same
+options but the shard, the same specs) and hold, together, every episode of the run exactly
+once, and the same control arms; otherwise nothing is written and the error names what is
+missing, doubled or different. The merged run records every environment its shards ran in."""
+
+from __future__ import annotations
+
+import sys
+from collections import Counter
+from dataclasses import replace
+from pathlib import Path
+
+from robofollow.benchmark.episode import Episode
+from robofollow.compiled_cache import Episodes
+from robofollow.errors import RoboFollowError, named
+from robofollow.eval.running.run_folder import (
+    CONTROLS,
+    RESULTS,
+    RUN_FILE,
+    SCORES,
+    SUMMARY,
+    check_out,
+    control_arms,
+    run_lock,
+    safe_path,
+    write_json,
+)
+from robofollow.eval.running.runner import (
+    EvalOptions,
+    select_episodes,
+    shard_of,
+    summary,
+    with_motion,
+)
+from robofollow.eval.running.saved_run import load_provenance, load_run
+from robofollow.eval.running.scores import write_scores
+from robofollow.files import (
+    differing_options,
+    json_line,
+    json_value,
+    write_bytes_atomic,
+)
+from robofollow.provenance import differences
+
+
+class MergeError(RoboFollowError):
+    """Shards that do not make one run."""
+
+
+def _whole(shards: list[Path], loaded: list[tuple[EvalOptions, list[dict]]],
+           episodes: int) -> EvalOptions:
+    """The options of the run the shards are parts of, once they are checked to be its N
+    parts (N at most its `episodes`)."""
+    whole = replace(loaded[0][0], shard=None)
+    parts = []
+    for shard, (options, _) in zip(shards, loaded, strict=True):
+        if options.shard is None:
+            raise MergeError(f"{shard} is a whole run, not a shard (eval --shard I/N makes one)")
+        if replace(options, shard=None) != whole:
+            differ = differing_options(replace(options, shard=None).to_json(),
+                                       whole.to_json())
+            raise MergeError(f"{shard} was run with other options than {shards[0]} "
+                             f"({', '.join(differ)} differ): shards of one run share them")
+        parts.append(shard_of(options.shard, episodes))
+        arms = control_arms(shard)
+        if arms != list(options.controls):
+            raise MergeError(f"{shard} holds the control arms {', '.join(arms) or 'none'} but "
+                             f"was run with {', '.join(options.controls) or 'none'}: its "
+                             "run.json and its controls/ folder disagree")
+    counts = {count for _, count in parts}
+    if len(counts) != 1:
+        raise MergeError(f"the shards split the run in different numbers of parts: "
+                         f"{', '.join(o.shard for o, _ in loaded)}")
+    count = counts.pop()
+    seen = Counter(index for index, _ in parts)
+    doubled = sorted(i for i, n in seen.items() if n > 1)
+    missing = sorted(set(range(1, count + 1)) - set(seen))
+    problems = [f"{what} {', '.join(f'{i}/{count}' for i in found)}"
+                for found, what in ((missing, "missing"), (doubled, "doubled")) if found]
+    if problems:
+        raise MergeError("the shards are not the run's parts once each: " + "; ".join(problems))
+    return whole
+
+
+def _provenance(shards: list[Path]) -> list[dict]:
+    """Every environment that ran a shard, once each, in the shards' order; said by name
+    where they differ."""
+    made = list({json_value(entry): entry for shard in shards
+                 for entry in load_provenance(shard)}.values())
+    for entry in made[1:]:
+        print(f"warning: the shards ran in different environments "
+              f"({'; '.join(differences(made[0], entry))}): their trajectory hashes are not "
+              "all comparable with one environment's", file=sys.stderr)
+    return made
+
+
+def merge(benchmark: Episodes, shards: list[Path], out: Path) -> tuple[dict, list[Path]]:
+    """Join the shards into the run folder `out` (new), and each of their control arms into
+    out/controls/<mode>; returns the run's summary and the folders written, the run last (its
+    report reads its arms'). Everything is checked before anything is written."""
+    loaded = [load_run(shard) for shard in shards]
+    if loaded[0][0].spec_digest != benchmark.spec.digest:
+        raise MergeError("the shards were run on other specs than these (--specs chooses the "
+                         "run's)")
+    episodes = select_episodes(benchmark, replace(loaded[0][0], shard=None))  # (every arm's)
+    options = _whole(shards, loaded, len(episodes))
+    arms = [(out, shards, loaded, options)]
+    for mode in options.controls:
+        arm_shards = [shard / CONTROLS / mode for shard in shards]
+        arm_loaded = [load_run(shard) for shard in arm_shards]
+        arm = _whole(arm_shards, arm_loaded, len(episodes))
+        if arm != options.arm(mode):
+            raise MergeError(f"{arm_shards[0]} is not the {mode} control arm of the shards' run")
+        arms.append((out / CONTROLS / mode, arm_shards, arm_loaded, arm))
+    joined = [(arm_out, arm_shards, arm_options, *_joined(episodes, arm_loaded, arm_out))
+              for arm_out, arm_shards, arm_loaded, arm_options in arms]
+    for arm_out, *_ in joined:
+        _check_new(arm_out)
+    results = [_write(*arm) for arm in joined]
+    return results[0], [arm_out for arm_out, *_ in joined[::-1]]
+
+
+def _check_new(out: Path) -> None:
+    """A merged run goes to a new folder (or an empty one)."""
+    check_out(out)
+    if (out / RUN_FILE).exists():
+        raise MergeError(f"{out} already holds a run; merge writes a new run: choose another "
+                         "--out")
+
+
+def _joined(episodes: list[Episode], loaded: list[tuple[EvalOptions, list[dict]]],
+            out: Path) -> tuple[list[dict], dict[str, str | None]]:
+    """One arm's records from its shards, in the run's episode order, checked to hold every
+    episode once; and each episode's motion."""
+    expected = [e.id for e in episodes]
+    records = [record for _, results in loaded for record in results]
+    seen = Counter(record["episode"] for record in records)
+    missing = [e for e in expected if not seen[e]]
+    doubled = sorted(e for e, n in seen.items() if n > 1)
+    foreign = sorted(set(seen) - set(expected))
+    problems = [f"{len(found)} episode(s) {what}: {named(found)}" for found, what in
+                ((missing, "missing (an unfinished shard? finish it with eval --resume)"),
+                 (doubled, "in more than one shard"), (foreign, "not of this run"))
+                if found]
+    if problems:
+        raise MergeError(f"cannot merge into {out}: " + "; ".join(problems))
+    order = {episode: index for index, episode in enumerate(expected)}
+    records.sort(key=lambda record: order[record["episode"]])
+    return records, {e.id: e.motion for e in episodes}
+
+
+def _write(out: Path, shards: list[Path], options: EvalOptions, records: list[dict],
+           motions: dict[str, str | None]) -> dict:
+    """One arm's run folder, from its joined records; returns its summary."""
+    with run_lock(out):
+        _check_new(out)
+        write_json(safe_path(out, RUN_FILE), dict(options.to_json(),
+                                                  provenance=_provenance(shards)))
+        write_bytes_atomic(safe_path(out, RESULTS),
+                           "".join(json_line(r) for r in records).encode())
+        result = summary(with_motion(records, motions), options)
+        write_json(safe_path(out, SUMMARY), result)
+        write_scores(safe_path(out, SCORES), records)
+    return result
