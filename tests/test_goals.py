@@ -8,7 +8,12 @@ import networkx as nx
 import pytest
 
 from robofollow.compiler.authoring.spec_loader import load_spec
-from robofollow.compiler.planning.goals import goal_graph, graph_to_dict, stage_order
+from robofollow.compiler.planning.goals import (
+    goal,
+    goal_graph,
+    graph_to_dict,
+    stage_order,
+)
 from robofollow.compiler.scene.behaviour import Behaviour, Step
 from robofollow.compiler.splits.training import check_training
 
@@ -26,7 +31,7 @@ def test_every_training_graph_is_a_gated_chain_whose_weights_sum_to_one(behaviou
         order = stage_order(graph)
         assert nx.is_directed_acyclic_graph(graph)
         assert list(graph.edges) == list(pairwise(order))
-        assert sum(graph.nodes[n]["weight"] for n in order) == pytest.approx(1.0)
+        assert sum(goal(graph, n).weight for n in order) == pytest.approx(1.0)
 
 
 @pytest.mark.parametrize("label,names,weights", [
@@ -45,29 +50,30 @@ def test_every_training_graph_is_a_gated_chain_whose_weights_sum_to_one(behaviou
 def test_stage_names_and_weights_follow_the_action(behaviours, label, names, weights):
     graph = goal_graph(behaviours[label])
     order = stage_order(graph)
-    assert [graph.nodes[n]["name"] for n in order] == names
-    assert [graph.nodes[n]["weight"] for n in order] == weights
+    assert [goal(graph, n).name for n in order] == names
+    assert [goal(graph, n).weight for n in order] == weights
 
 
 def test_sequences_chain_a_then_b(behaviours):
     graph = goal_graph(behaviours["s41_seq_r_green_cylinder_then_l_bowl"])
-    first, second = [graph.nodes[n]["intent"]["params"] for n in stage_order(graph)[:2]]
+    first, second = [goal(graph, n).intent.params for n in stage_order(graph)[:2]]
     assert (first["arm"], first["object"]) == ("right", "green_cylinder")
     assert (second["arm"], second["object"]) == ("left", "red_cube")
 
 
 def test_nodes_carry_predicates_with_parameters(behaviours):
     graph = goal_graph(behaviours["r_pick2_via4_to6_short_front"])
-    route = graph.nodes["route"]["execution"]
-    assert route["predicate"] == "route_footprints"
-    assert route["params"]["waypoints"] == [["via", "yellow_slab"]]
-    assert graph.nodes["outcome"]["execution"]["params"]["yaw_deg"] == 0.0
-    assert graph.nodes["finish"]["intent"]["params"]["keep"] == [["red_slab", "placed", "right"]]
+    route = goal(graph, "route").execution
+    assert route.name == "route_footprints"
+    assert route.params["waypoints"] == (("via", "yellow_slab"),)  # read-only: tuples
+    assert route.to_json()["params"]["waypoints"] == [["via", "yellow_slab"]]
+    assert goal(graph, "outcome").execution.params["yaw_deg"] == 0.0
+    assert goal(graph, "finish").intent.params["keep"] == (("red_slab", "placed", "right"),)
     assert graph.graph["profile"]["name"] == "default"
 
 
 def test_the_finish_knows_how_each_handled_object_ends(behaviours):
-    keep = {label: goal_graph(behaviours[label]).nodes["finish"]["intent"]["params"]["keep"]
+    keep = {label: goal(goal_graph(behaviours[label]), "finish").intent.to_json()["params"]["keep"]
             for label in ("pickup_left_cube", "push_left_cube_to_red_cylinder",
                           "s41_seq_r_green_cylinder_then_l_bowl")}
     assert keep["pickup_left_cube"] == [["large_blue_cube", "held", "left"]]
@@ -78,7 +84,7 @@ def test_the_finish_knows_how_each_handled_object_ends(behaviours):
 
 def test_a_branch_that_asks_for_nothing_is_scored_on_staying_still():
     graph = goal_graph(Behaviour(steps=(), condition=False, branch="otherwise"))
-    assert [graph.nodes[n]["name"] for n in stage_order(graph)] == ["finish"]
+    assert [goal(graph, n).name for n in stage_order(graph)] == ["finish"]
 
 
 def test_graph_json_is_deterministic(behaviours):

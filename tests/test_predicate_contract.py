@@ -19,9 +19,9 @@ def written() -> tuple[set[str], set[str]]:
     behaviours = [*compiled.training.values(), *(t.behaviour for t in compiled.splits.tasks)]
     intents, executions = set(), set()
     for behaviour in behaviours:
-        for _, node in goal_graph(behaviour).nodes(data=True):
-            intents.add(node["intent"]["predicate"])
-            executions.add(node["execution"]["predicate"])
+        for _, node in goal_graph(behaviour).nodes(data="goal"):
+            intents.add(node.intent.name)
+            executions.add(node.execution.name)
     return intents, executions
 
 

@@ -34,9 +34,9 @@ def test_a_compiled_benchmark_pickles_for_worker_processes_and_stays_read_only()
 
 def test_the_cached_goal_nodes_are_read_only():
     behaviour = next(iter(benchmark().training.values()))
-    _, node, _ = scoring_nodes(behaviour, DEFAULT_PROFILE)[0]
+    node, _ = scoring_nodes(behaviour, DEFAULT_PROFILE)[0]
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        node.weight = 1.0
     with pytest.raises(TypeError):
-        node["weight"] = 1.0
-    with pytest.raises(TypeError):
-        node["intent"]["params"]["arm"] = "right"
-    assert scoring_nodes(behaviour, DEFAULT_PROFILE)[0][1] is node
+        node.intent.params["arm"] = "right"
+    assert scoring_nodes(behaviour, DEFAULT_PROFILE)[0][0] is node

@@ -73,10 +73,10 @@ def _completes(asked: Behaviour, asked_checks: Checks, performed: Checks,
 def _intent_checks(behaviour: Behaviour, profile: ScoringProfile) -> Checks:
     """(weight, Intent check) of the working stages in scoring order, and of the finish."""
     work, finish = [], None
-    for _, node, _ in scoring_nodes(behaviour, profile):
-        check = (node["weight"], json.dumps([node["name"], node["arm"], node["intent"]],
-                                            sort_keys=True, default=dict))  # (read-only views)
-        if node["name"] == "finish":
+    for node, _ in scoring_nodes(behaviour, profile):
+        check = (node.weight, json.dumps([node.name, node.arm, node.intent.to_json()],
+                                         sort_keys=True))
+        if node.name == "finish":
             finish = check
         else:
             work.append(check)

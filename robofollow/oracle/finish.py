@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from robofollow.compiler.planning.goals import GoalNode
 from robofollow.compiler.scene.spec import TABLE_HEIGHT
 from robofollow.oracle import predicates as P
 from robofollow.oracle.outcome import GRASPING, Outcome, cm
@@ -12,14 +13,14 @@ from robofollow.oracle.recording import Recording, arm_index
 from robofollow.trajectory import ARMS
 
 
-def finish(rec: Recording, node: dict, marks: dict) -> Outcome:
+def finish(rec: Recording, node: GoalNode, marks: dict) -> Outcome:
     """After the action: each working arm back home and still within the deadline, staying
     (never leaving, moving, grasping or closing at an object again); each handled object
     still held (pickups) or where it came to rest; no other object moved, knocked over or
     off the table (what pushes did is judged here, by its effect; a push's target may be
     struck, within `struck_tolerance`); the idle arm never
     grasping or closing at an object, never in the work area. Every violation is named."""
-    p = node["intent"]["params"]
+    p = node.intent.params
     done, rests = marks.get("completion", 0), dict(marks.get("rests", ()))
     problems = []
     for name in dict.fromkeys(p["arms"]):

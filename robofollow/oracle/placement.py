@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from robofollow.compiler.planning.goals import GoalNode
 from robofollow.compiler.scene.world import DIRECTIONS
 from robofollow.oracle import predicates as P
 from robofollow.oracle.instead import where
@@ -60,16 +61,16 @@ def deliveries(rec: Recording, arm: int, body: int, after: int) -> tuple[Deliver
 Check = Callable[[Recording, dict, int], "str | None"]  # (rec, params, frame) -> what is wrong
 
 
-def _placed(rec: Recording, node: dict, marks: dict, aim: Check, exact: Check,
+def _placed(rec: Recording, node: GoalNode, marks: dict, aim: Check, exact: Check,
             wanted: str) -> Outcome:
     """Intent: a delivery passes `aim` (the right side, bowl, label). Execution: such a
     delivery was a release low over the surface (not a drop), and where the object came to
     rest passes `exact` (distance, resting, orientation)."""
-    intent, execution = node["intent"]["params"], node["execution"]["params"]
+    intent, execution = node.intent.params, node.execution.params
     name = intent["object"]
     if "lift" not in marks:
         return Outcome(False, False, None, f"{name} was never lifted")
-    found = deliveries(rec, arm_index(node["arm"]), rec.index(name), marks["lift"])
+    found = deliveries(rec, arm_index(node.arm), rec.index(name), marks["lift"])
     if not found:
         return Outcome(False, False, None, f"{name} was never set down or let go of away "
                        "from where it was taken")
@@ -203,22 +204,22 @@ def rests_on_label(rec: Recording, p: dict, frame: int) -> str | None:
     return _turned(rec, p, frame)
 
 
-def relative_placement(rec: Recording, node: dict, marks: dict) -> Outcome:
-    p = node["intent"]["params"]
+def relative_placement(rec: Recording, node: GoalNode, marks: dict) -> Outcome:
+    p = node.intent.params
     wanted = f"{p['relation'].replace('_', ' ')} {p['landmark']}"
     return _placed(rec, node, marks, _towards, rests_in_relation, wanted)
 
 
-def stack(rec: Recording, node: dict, marks: dict) -> Outcome:
+def stack(rec: Recording, node: GoalNode, marks: dict) -> Outcome:
     return _placed(rec, node, marks, _aimed_at(None, "target"), rests_on,
-                   f"on {node['intent']['params']['target']}")
+                   f"on {node.intent.params['target']}")
 
 
-def bowl(rec: Recording, node: dict, marks: dict) -> Outcome:
+def bowl(rec: Recording, node: GoalNode, marks: dict) -> Outcome:
     return _placed(rec, node, marks, _aimed_at(("bowl",), "bowl"), rests_in,
-                   f"in {node['intent']['params']['bowl']}")
+                   f"in {node.intent.params['bowl']}")
 
 
-def orientation(rec: Recording, node: dict, marks: dict) -> Outcome:
+def orientation(rec: Recording, node: GoalNode, marks: dict) -> Outcome:
     return _placed(rec, node, marks, _aimed_at_label, rests_on_label,
-                   f"on {node['intent']['params']['target']}")
+                   f"on {node.intent.params['target']}")

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import itertools
 
-from robofollow.compiler.planning.goals import scoring_nodes
+from robofollow.compiler.planning.goals import GoalNode, scoring_nodes
 from robofollow.compiler.planning.profile import DEFAULT_PROFILE, ScoringProfile
 from robofollow.compiler.scene.behaviour import Behaviour, Step, describe
 from robofollow.compiler.scene.spec import Scene
@@ -96,13 +96,12 @@ def complete(rec: Recording, behaviour: Behaviour, stages: list[StageResult],
         return _total(stages, "intent") >= least and _total(stages, "execution") >= least
     if any(s.name == "orientation" and not s.execution for s in stages):
         return False  # a transfer's route and orientation, as its stages ask (gated)
-    objectives = {node_id.rpartition(".")[0]: node
-                  for node_id, node, _ in scoring_nodes(behaviour, rec.profile)
-                  if node_id.rpartition(".")[2] in END_STAGES}
+    objectives = {node.step: node for node, _ in scoring_nodes(behaviour, rec.profile)
+                  if node.id.rpartition(".")[2] in END_STAGES}
     return all(_final_state(rec, step, objectives.get(key)) for key, step in _steps(behaviour))
 
 
-def _final_state(rec: Recording, step: Step, node: dict | None) -> bool:
+def _final_state(rec: Recording, step: Step, node: GoalNode | None) -> bool:
     """The step's end state over the last frames, brought about by its named arm: a picked
     object still held, any other let go of and its objective's rest geometry holding."""
     arm, source = arm_index(step.arm), rec.index(step.source)
@@ -112,8 +111,8 @@ def _final_state(rec: Recording, step: Step, node: dict | None) -> bool:
         return rec.holding(arm)[-1] == source
     if rec.holding(arm)[-1] == source:
         return False
-    check = AT_REST[node["execution"]["predicate"]]
-    params = node["execution"]["params"]
+    check = AT_REST[node.execution.name]
+    params = node.execution.params
     last = range(max(0, rec.last - rec.profile.final_frames + 1), rec.last + 1)
     return all(check(rec, params, frame) is None for frame in last)
 
@@ -124,8 +123,8 @@ def evaluate(rec: Recording, behaviour: Behaviour) -> list[StageResult]:
     marks: dict[str, dict] = {}
     reversed_steps = _reverse_order(rec, behaviour)
     results, blocked_intent, blocked_execution = [], None, None
-    for node_id, node, key in nodes:
-        step = node_id.rpartition(".")[0]
+    for node, key in nodes:
+        step = node.step
         mark = marks.setdefault(step, {})
         if reversed_steps:
             outcome = Outcome(False, False, None, reversed_steps)
@@ -134,27 +133,27 @@ def evaluate(rec: Recording, behaviour: Behaviour) -> list[StageResult]:
         else:
             _prepare(node, mark, marks, step, behaviour)
             outcome = _evaluate_node(rec, node, key, mark)
-            if node["name"] in SOURCE_STAGES:
+            if node.name in SOURCE_STAGES:
                 outcome = _first_arm(rec, dict(_steps(behaviour))[step], outcome)
         intent = outcome.intent and not blocked_intent
         execution = outcome.execution and intent and not blocked_execution
         reason = outcome.reason
         if outcome.execution and not execution:
             reason += f" (Execution not scored: {blocked_execution} not met)"
-        weight = node["weight"]
-        results.append(StageResult(stage=node_id, name=node["name"], weight=weight,
+        weight = node.weight
+        results.append(StageResult(stage=node.id, name=node.name, weight=weight,
                                    intent=weight if intent else 0.0,
                                    execution=weight if execution else 0.0,
                                    first_step=outcome.frame, reason=reason))
-        blocked_intent = blocked_intent or (None if intent else node_id)
-        blocked_execution = blocked_execution or (None if execution else node_id)
+        blocked_intent = blocked_intent or (None if intent else node.id)
+        blocked_execution = blocked_execution or (None if execution else node.id)
     return results
 
 
-def _evaluate_node(rec: Recording, node: dict, key: str, mark: dict) -> Outcome:
+def _evaluate_node(rec: Recording, node: GoalNode, key: str, mark: dict) -> Outcome:
     """One stage's outcome, computed once per recording for the same check and start marks."""
     def run() -> tuple[Outcome, dict]:
-        outcome = EVALUATORS[node["intent"]["predicate"]](rec, node, mark)
+        outcome = EVALUATORS[node.intent.name](rec, node, mark)
         return outcome, dict(mark)
 
     outcome, after = rec.cached((key, tuple(sorted(mark.items()))), run)
@@ -162,12 +161,12 @@ def _evaluate_node(rec: Recording, node: dict, key: str, mark: dict) -> Outcome:
     return outcome
 
 
-def _prepare(node: dict, mark: dict, marks: dict, step: str, behaviour: Behaviour) -> None:
+def _prepare(node: GoalNode, mark: dict, marks: dict, step: str, behaviour: Behaviour) -> None:
     """Hand a stage the frames it starts from: a sequence step's search starts where the
     previous step lifted its object; the finish starts when the last step completed (its
     release, else its objective, lift or attempt) and knows where each handled object came
     to rest."""
-    if node["name"] == "finish":
+    if node.name == "finish":
         last = marks.get(_steps(behaviour)[-1][0], {})
         mark["completion"] = next((last[k] for k in ("release", "objective", "lift", "attempt")
                                    if k in last), 0)

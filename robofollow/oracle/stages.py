@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from robofollow.compiler.planning.goals import GoalNode
 from robofollow.oracle import predicates as P
 from robofollow.oracle.finish import finish
 from robofollow.oracle.outcome import GOING_FOR, Outcome, cm
@@ -30,11 +31,11 @@ from robofollow.oracle.recording import Recording, arm_index
 
 # -- source grounding -------------------------------------------------------------------------
 
-def went_for(rec: Recording, node: dict, marks: dict) -> Outcome:
+def went_for(rec: Recording, node: GoalNode, marks: dict) -> Outcome:
     """Intent: the first body the arm grasps or closes its fingers at (from `marks['start']`)
     is the source. Execution: the arm then holds the source and lifts it (and not the body
     it stood on with it)."""
-    params, lift = node["intent"]["params"], node["execution"]["params"]["min_lift"]
+    params, lift = node.intent.params, node.execution.params["min_lift"]
     arm, source, name = arm_index(params["arm"]), rec.index(params["object"]), params["object"]
     attempt = rec.first_attempt(arm, marks.get("start", 0), GOING_FOR["pick"])
     if attempt is None:
@@ -64,10 +65,10 @@ def went_for(rec: Recording, node: dict, marks: dict) -> Outcome:
     return Outcome(True, False, t, f"{found}, but lifted it {cm(best)} (needs {cm(lift)})")
 
 
-def push_contact(rec: Recording, node: dict, marks: dict) -> Outcome:
+def push_contact(rec: Recording, node: GoalNode, marks: dict) -> Outcome:
     """Intent: the first body the arm grasps or pushes is the source, pushed. Execution: the
     gripper was closed and low when the source started to move."""
-    intent, execution = node["intent"]["params"], node["execution"]["params"]
+    intent, execution = node.intent.params, node.execution.params
     arm, source, name = arm_index(intent["arm"]), rec.index(intent["object"]), intent["object"]
     attempt = rec.first_attempt(arm, marks.get("start", 0), GOING_FOR["push"])
     if attempt is None:
@@ -87,11 +88,11 @@ def push_contact(rec: Recording, node: dict, marks: dict) -> Outcome:
     return Outcome(True, True, t, f"pushed {name} from frame {t}, the gripper closed")
 
 
-def pushed_towards(rec: Recording, node: dict, marks: dict) -> Outcome:
+def pushed_towards(rec: Recording, node: GoalNode, marks: dict) -> Outcome:
     """Intent: pushed from behind, the source moves towards the target's start. Execution:
     where it comes to rest, it has moved far enough that way."""
-    intent, execution = node["intent"]["params"], node["execution"]["params"]
-    source, arm, t = rec.index(intent["object"]), arm_index(node["arm"]), marks["attempt"]
+    intent, execution = node.intent.params, node.execution.params
+    source, arm, t = rec.index(intent["object"]), arm_index(node.arm), marks["attempt"]
     direction = _direction(rec, intent)
     moved = P.progress(rec.xy[:, source] - rec.xy[0, source], direction, intent["cone_deg"])
     behind = (rec.ee[:, arm, :2] - rec.xy[:, source]) @ direction <= 0
@@ -136,14 +137,14 @@ AT_REST = {"rests_in_relation": rests_in_relation, "rests_on": rests_on, "rests_
 
 # -- routes -----------------------------------------------------------------------------------
 
-def route(rec: Recording, node: dict, marks: dict) -> Outcome:
+def route(rec: Recording, node: GoalNode, marks: dict) -> Outcome:
     """While carried, the object is over a body when its centre is over that body's
     footprint (at any altitude). 'Pass over W': Intent when it crosses W's column on W's side
     (nearer W than the column's other bodies, within `y` of it), Execution when it is over W.
     'Avoid X': Intent when it crosses X's column beside X (not over it there), Execution when
     it is never over X."""
-    p = node["intent"]["params"]
-    source, arm = rec.index(p["object"]), arm_index(node["arm"])
+    p = node.intent.params
+    source, arm = rec.index(p["object"]), arm_index(node.arm)
     since = marks.get("hold", marks["attempt"])
     carried = (rec.holding(arm) == source) & (rec.rise(source, since) >= rec.profile.min_lift)
     if not carried.any():

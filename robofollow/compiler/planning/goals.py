@@ -3,15 +3,16 @@
 Stages follow the paper: source grounding (grasp or push contact), the action objective
 (relative placement, stack, bowl, push, route), the outcome (placement and orientation), and a
 finishing stage for every task (back home and still, the handled objects left as put, nothing
-else disturbed, the other arm out of the work area). Each node carries its
-weight and the intent and execution predicates, by name, with their parameters; an edge
-a -> b means b is scored only when a is fully achieved. A sequence chains its steps.
+else disturbed, the other arm out of the work area). Each node is a frozen GoalNode: its
+weight and the intent and execution predicates, by name, with their parameters (read-only); an
+edge a -> b means b is scored only when a is fully achieved. A sequence chains its steps.
 """
 
 from __future__ import annotations
 
 import json
 from collections.abc import Mapping
+from dataclasses import dataclass
 from functools import lru_cache
 from itertools import pairwise
 from types import MappingProxyType
@@ -22,20 +23,60 @@ from robofollow.compiler.planning.profile import DEFAULT_PROFILE, ScoringProfile
 from robofollow.compiler.scene.behaviour import Behaviour, Step
 
 
-def _predicate(name: str, **params) -> dict:
-    return {"predicate": name, "params": params}
+@dataclass(frozen=True, slots=True)
+class Predicate:
+    """A predicate the oracle evaluates (stages.EVALUATORS, stages.AT_REST), by name, with its
+    parameters: body names, metres, degrees (read-only: lists are tuples)."""
+
+    name: str
+    params: Mapping[str, object]
+
+    def to_json(self) -> dict:
+        return {"predicate": self.name, "params": _plain(self.params)}
+
+
+@dataclass(frozen=True, slots=True)
+class GoalNode:
+    """One stage of a goal DAG: its place in the scoring order, name, weight, arm (None for
+    the finish) and the predicates its Intent and Execution are judged by."""
+
+    id: str
+    stage: int
+    name: str
+    weight: float
+    arm: str | None
+    intent: Predicate
+    execution: Predicate
+
+    @property
+    def step(self) -> str:
+        """The step the stage belongs to ('step2' in a sequence, '' otherwise)."""
+        return self.id.rpartition(".")[0]
+
+    def to_json(self) -> dict:
+        return {"id": self.id, "stage": self.stage, "name": self.name, "weight": self.weight,
+                "arm": self.arm, "intent": self.intent.to_json(),
+                "execution": self.execution.to_json()}
+
+    def check_key(self) -> str:
+        """What the stage checks, as text: equal keys in different behaviours evaluate alike."""
+        return json.dumps([self.name, self.arm, self.intent.to_json(), self.execution.to_json()],
+                          sort_keys=True)
+
+
+def _predicate(name: str, **params) -> Predicate:
+    return Predicate(name, _read_only(params))
 
 
 class _Builder:
     def __init__(self, profile: ScoringProfile):
         self.p = profile
-        self.nodes: list[tuple[str, dict]] = []
+        self.nodes: list[GoalNode] = []
 
-    def add(self, node_id: str, name: str, weight: float, arm: str | None, intent: dict,
-            execution: dict) -> None:
-        self.nodes.append((node_id, {"stage": len(self.nodes) + 1, "name": name,
-                                     "weight": round(weight, 6), "arm": arm,
-                                     "intent": intent, "execution": execution}))
+    def add(self, node_id: str, name: str, weight: float, arm: str | None, intent: Predicate,
+            execution: Predicate) -> None:
+        self.nodes.append(GoalNode(node_id, len(self.nodes) + 1, name, round(weight, 6), arm,
+                                   intent, execution))
 
     def grasp(self, prefix: str, step: Step, weight: float, lift: float) -> None:
         self.add(f"{prefix}source", "source_grounding", weight, step.arm,
@@ -159,27 +200,32 @@ def goal_graph(behaviour: Behaviour, profile: ScoringProfile = DEFAULT_PROFILE) 
     else:
         builder.sequence(behaviour.steps)
     graph = nx.DiGraph(profile=profile.model_dump(mode="json"), branch=behaviour.branch)
-    for node_id, attributes in builder.nodes:
-        graph.add_node(node_id, **attributes)
-    for (a, _), (b, _) in pairwise(builder.nodes):
-        graph.add_edge(a, b, kind="gates")
+    for node in builder.nodes:
+        graph.add_node(node.id, goal=node)
+    for a, b in pairwise(builder.nodes):
+        graph.add_edge(a.id, b.id, kind="gates")
     return graph
+
+
+def goal(graph: nx.DiGraph, node_id: str) -> GoalNode:
+    """The stage a node of a goal DAG stands for."""
+    return graph.nodes[node_id]["goal"]
 
 
 def stage_order(graph: nx.DiGraph) -> list[str]:
     """Nodes in scoring order (deterministic)."""
-    return list(nx.lexicographical_topological_sort(graph, key=lambda n: graph.nodes[n]["stage"]))
+    return list(nx.lexicographical_topological_sort(graph, key=lambda n: goal(graph, n).stage))
 
 
 def graph_to_dict(graph: nx.DiGraph) -> dict:
     """A JSON-ready form: nodes in scoring order, gating edges, the profile's name."""
     return {"profile": graph.graph["profile"]["name"], "branch": graph.graph["branch"],
-            "nodes": [{"id": n, **graph.nodes[n]} for n in stage_order(graph)],
+            "nodes": [goal(graph, n).to_json() for n in stage_order(graph)],
             "edges": [[a, b] for a, b in graph.edges]}
 
 
 def _read_only(value):
-    """A node's attributes as read-only views (mappings) and tuples (lists), all through."""
+    """Parameters as read-only views (mappings) and tuples (lists), all through."""
     if isinstance(value, dict):
         return MappingProxyType({key: _read_only(item) for key, item in value.items()})
     if isinstance(value, list | tuple):
@@ -187,12 +233,19 @@ def _read_only(value):
     return value
 
 
+def _plain(value):
+    """Read-only parameters back as JSON values: dicts and lists."""
+    if isinstance(value, Mapping):
+        return {key: _plain(item) for key, item in value.items()}
+    if isinstance(value, tuple):
+        return [_plain(item) for item in value]
+    return value
+
+
 @lru_cache(maxsize=4096)
 def scoring_nodes(behaviour: Behaviour,
-                  profile: ScoringProfile) -> tuple[tuple[str, Mapping, str], ...]:
-    """The goal DAG's nodes in scoring order, each with a key naming what it checks (equal
-    keys in different behaviours evaluate alike, so a recording evaluates them once). Cached
-    and shared by every caller, so read-only all through."""
+                  profile: ScoringProfile) -> tuple[tuple[GoalNode, str], ...]:
+    """The goal DAG's stages in scoring order, each with its check key (GoalNode.check_key:
+    a recording evaluates equal checks once). Cached and shared by every caller."""
     graph = goal_graph(behaviour, profile)
-    return tuple((n, _read_only(graph.nodes[n]), json.dumps([graph.nodes[n][k] for k in (
-        "name", "arm", "intent", "execution")], sort_keys=True)) for n in stage_order(graph))
+    return tuple((node, node.check_key()) for node in (goal(graph, n) for n in stage_order(graph)))
