@@ -81,9 +81,11 @@ class SpecError(RoboFollowError):
     caret."""
 
     def __init__(self, code: str, message: str, *, file: str, line: int, column: int,
-                 source_line: str = "", length: int = 1, hints: tuple[str, ...] = ()):
+                 source_line: str = "", length: int = 1, hints: tuple[str, ...] = (),
+                 severity: str = "error"):
         super().__init__(message)
         self.code = code
+        self.severity = severity  # "error", or "warning": a problem that stops nothing
         self.message = message
         self.file = file
         self.line = line
@@ -93,7 +95,8 @@ class SpecError(RoboFollowError):
         self.hints = hints
 
     def __str__(self) -> str:
-        return f"{self.file}:{self.line}:{self.column}: error[{self.code}]: {self.message}"
+        return (f"{self.file}:{self.line}:{self.column}: {self.severity}[{self.code}]: "
+                f"{self.message}")
 
     def render(self) -> str:
         lines = [str(self)]

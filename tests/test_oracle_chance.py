@@ -17,8 +17,8 @@ from robofollow.eval.running.episode import run_episode
 from robofollow.eval.running.instructions import given_instruction
 from robofollow.oracle.chance import (
     available_behaviours,
-    best_guess,
     completes_if_performed,
+    earnings,
     guessing,
     intent_if_performed,
 )
@@ -64,12 +64,13 @@ def test_the_best_blind_guess_is_the_one_behaviour_that_earns_most_over_the_aske
     left, right = TRAINING["pickup_left_cube"], TRAINING["pickup_right_cube"]
     stack = TRAINING["stack_left_cube_on_red_cylinder"]
     # the left cube twice and the right one once: going for the left cube earns 2 of 3
-    assert best_guess([left, left, right], [right, left]) == {"IS": 2.0, "CR": 2.0}
+    assert earnings([left, left, right], [right, left]) == [
+        [(0.0, False), (0.0, False), (1.0, True)], [(1.0, True), (1.0, True), (0.0, False)]]
     # stacking the left cube on the red cylinder when asked to stack it on the blue one:
     # the source stage only, and no completion
     blue = TRAINING["stack_left_cube_on_blue_cylinder"]
-    assert best_guess([blue], [stack]) == {"IS": 0.4, "CR": 0.0}
-    assert best_guess([left], []) == {"IS": 0.0, "CR": 0.0}
+    assert earnings([blue], [stack]) == [[(0.4, False)]]
+    assert earnings([left], []) == []
 
 
 def test_in_every_generated_cell_the_best_blind_guess_is_between_chance_and_following():
@@ -82,6 +83,8 @@ def test_in_every_generated_cell_the_best_blind_guess_is_between_chance_and_foll
                 World(scene, t.layout), candidates)]) for t in tasks]
             for metric in ("IS", "CR"):  # (the audit keeps one decimal)
                 uniform = 100 * sum(c[metric] for c in chance) / len(tasks)
+                assert best[scene_id][level][f"chance_{metric}"] == pytest.approx(uniform,
+                                                                                abs=0.06)
                 assert uniform - 0.06 <= best[scene_id][level][metric] <= 100.0, (
                     scene_id, level, metric)
         # on the training layout each training task's own behaviour is a choice: the best

@@ -104,7 +104,7 @@ def test_an_unknown_name_suggests_a_declared_one(tmp_path, capsys, old, new, nam
 
 def test_an_unknown_name_with_nothing_close_lists_the_known_ones(tmp_path, capsys):
     assert_error(tmp_path, edit("    jitter", f"    set {MARK}gravity = 9.8\n    jitter"),
-                 "unknown-setting", "no setting named gravity (known: table_height)", capsys)
+                 "unknown-setting", "no setting named gravity (known: table_height, guess_margin)", capsys)
 
 
 # ---------------------------------------------------------------- geometry

@@ -1,43 +1,117 @@
 """What a language-blind policy can earn in each test cell at best: on each layout of the cell,
 the one training behaviour the layout allows that earns the most over the cell's tasks there
-(chosen knowing them), performed perfectly. Beside the chance level (a uniform guess), it says
-how much of a cell the instruction decides: where it is high, a policy that ignores the words
-but happens to do the right thing on each layout scores well, and the cell tells following
-from guessing apart poorly."""
+(chosen knowing them), performed perfectly. Beside it, the chance level: a uniform guess among
+the behaviours each layout allows. Where the best guess rises far above chance, a policy that
+ignores the words but happens to do the right thing on each layout scores well, and the cell
+tells following from guessing apart poorly: such a cell is `guessable` when its best guess
+exceeds chance by more than the scene's `guess_margin` (Intent points), and the layouts that
+make it so are named, each with its guess and the tests that guess earns most on."""
 
 from __future__ import annotations
 
 from collections import defaultdict
 from collections.abc import Iterable, Mapping
 
+from robofollow.compiler.authoring.spec_files import Sources, spec_error
 from robofollow.compiler.scene.behaviour import Behaviour
 from robofollow.compiler.scene.spec import LEVELS, Spec, scene_behaviours
 from robofollow.compiler.scene.world import World
 from robofollow.compiler.splits.generator import TestTask
-from robofollow.oracle.chance import available_behaviours, best_guess
+from robofollow.errors import SpecError
+from robofollow.oracle.chance import available_behaviours, earnings
+
+NAMED_TESTS = 5  # tests named per layout in a guessable cell
+EARNING = 0.5  # a test the guess earns at least this share of Intent on is named as earned
 
 
 def blind_best(spec: Spec, training: Mapping[str, Behaviour],
-               tasks: Iterable[TestTask]) -> dict[str, dict[str, dict[str, float]]]:
-    """{scene: {level: {"IS": 0-100, "CR": 0-100}}}: the best language-blind guess's mean
-    Intent and completion rate over the cell's test tasks (cells without tasks are left out)."""
-    cells: dict[tuple[str, str], dict[str, list[Behaviour]]] = defaultdict(
+               tasks: Iterable[TestTask]) -> dict[str, dict[str, dict]]:
+    """{scene: {level: {"IS", "CR", "chance_IS", "chance_CR" (0-100), "layouts": [...]}}}: the
+    best language-blind guess's mean Intent and completion rate over the cell's test tasks,
+    a uniform guess's, and per layout (most guessable first) the guess that earns most Intent
+    there, its mean Intent and chance's there, and the tests it earns at least EARNING of the
+    Intent on (cells without tasks are left out)."""
+    cells: dict[tuple[str, str], dict[str, list[TestTask]]] = defaultdict(
         lambda: defaultdict(list))
     for task in tasks:
-        cells[task.scene, task.level][task.layout].append(task.behaviour)
-    found: dict[str, dict[str, dict[str, float]]] = {}
+        cells[task.scene, task.level][task.layout].append(task)
+    found: dict[str, dict[str, dict]] = {}
     for scene_id, scene in spec.scenes.items():
         candidates = scene_behaviours(spec, training, scene_id)
         for level in LEVELS:
             layouts = cells.get((scene_id, level))
-            if not layouts:
-                continue
-            earned = {"IS": 0.0, "CR": 0.0}
-            for layout, asked in layouts.items():
-                labels = available_behaviours(World(scene, layout), candidates)
-                best = best_guess(asked, [candidates[label] for label in labels])
-                earned = {metric: earned[metric] + best[metric] for metric in earned}
-            count = sum(len(asked) for asked in layouts.values())
-            found.setdefault(scene_id, {})[level] = {
-                metric: round(100 * value / count, 1) for metric, value in earned.items()}
+            if layouts:
+                found.setdefault(scene_id, {})[level] = _cell(scene, candidates, layouts)
     return found
+
+
+def _cell(scene, candidates: Mapping[str, Behaviour],
+          layouts: Mapping[str, list[TestTask]]) -> dict:
+    """One cell: the sums over its layouts, then per-task means (0-100)."""
+    totals = {"IS": 0.0, "CR": 0.0, "chance_IS": 0.0, "chance_CR": 0.0}
+    shown = []
+    for layout, asked in layouts.items():
+        labels = available_behaviours(World(scene, layout), candidates)
+        table = earnings([task.behaviour for task in asked],
+                         [candidates[label] for label in labels])
+        if not table:
+            continue
+        intents = [sum(intent for intent, _ in row) for row in table]
+        chance = sum(intents) / len(table)  # a uniform guess, summed over the layout's tasks
+        totals["IS"] += max(intents)
+        totals["CR"] += max(float(sum(done for _, done in row)) for row in table)
+        totals["chance_IS"] += chance
+        totals["chance_CR"] += sum(done for row in table for _, done in row) / len(table)
+        best = intents.index(max(intents))
+        earning = [task.id for task, (intent, _) in zip(asked, table[best], strict=True)
+                   if intent >= EARNING]
+        shown.append((max(intents) - chance, {
+            "layout": layout, "guess": labels[best], "tests": len(asked),
+            "guess_IS": round(100 * max(intents) / len(asked), 1),
+            "chance_IS": round(100 * chance / len(asked), 1),
+            "earning": len(earning), "earning_tests": earning[:NAMED_TESTS]}))
+    count = sum(len(asked) for asked in layouts.values())
+    cell: dict = {metric: round(100 * value / count, 1) for metric, value in totals.items()}
+    cell["layouts"] = [entry for _, entry in sorted(shown, key=lambda pair: -pair[0])]
+    return cell
+
+
+def guessable(spec: Spec, best: Mapping[str, Mapping[str, dict]]) -> list[dict]:
+    """The cells whose best blind guess exceeds chance by more than the scene's guess margin:
+    {"scene", "level", "IS", "chance_IS", "margin", "layouts"} (the layouts where the guess
+    beats chance), in scene and level order."""
+    found = []
+    for scene_id, levels in best.items():
+        margin = spec.scenes[scene_id].guess_margin
+        for level, cell in levels.items():
+            if cell["IS"] - cell["chance_IS"] > margin:
+                found.append({"scene": scene_id, "level": level, "IS": cell["IS"],
+                              "chance_IS": cell["chance_IS"], "margin": margin,
+                              "layouts": [entry for entry in cell["layouts"]
+                                          if entry["guess_IS"] > entry["chance_IS"]]})
+    return found
+
+
+def guess_warnings(spec: Spec, cells: Iterable[Mapping]) -> list[SpecError]:
+    """Each guessable cell as a warning at its split rule, naming the layouts that make it so
+    and the tests each one's guess answers."""
+    warnings, sources = [], Sources()
+    for cell in cells:
+        rule = spec.scenes[cell["scene"]].splits[cell["level"]]
+        over = cell["IS"] - cell["chance_IS"]
+        hints = [f"layout {entry['layout']}: performing {entry['guess']} earns Intent "
+                 f"{entry['guess_IS']:.1f} over its {entry['tests']} tests (chance "
+                 f"{entry['chance_IS']:.1f}), at least half on {entry['earning']}"
+                 + (": " + ", ".join(entry["earning_tests"]) if entry["earning"] else "")
+                 + (", ..." if entry["earning"] > len(entry["earning_tests"]) else "")
+                 for entry in cell["layouts"]]
+        hints.append("add tests on these layouts that other training behaviours answer, or "
+                     "raise the bound with `set guess_margin = N`")
+        message = (f"{cell['scene']} {cell['level']} tells following from guessing poorly: the "
+                   f"best language-blind guess earns Intent {cell['IS']:.1f}, {over:.1f} points "
+                   f"over chance ({cell['chance_IS']:.1f}); the scene allows "
+                   f"{cell['margin']:g}")
+        warnings.append(spec_error("guessable", message, rule.source, sources,
+                                   length=len(rule.level), hints=tuple(hints),
+                                   severity="warning"))
+    return warnings

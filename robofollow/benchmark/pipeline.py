@@ -13,7 +13,7 @@ from types import MappingProxyType
 
 from robofollow.audit.splits import audit, findings
 from robofollow.audit.task_list import listed_tests
-from robofollow.benchmark.guessing import blind_best
+from robofollow.benchmark.guessing import blind_best, guessable
 from robofollow.compiler.authoring.spec_files import spec_files
 from robofollow.compiler.authoring.spec_loader import load_partial
 from robofollow.compiler.scene.behaviour import Behaviour
@@ -112,6 +112,7 @@ def _compile(specs: Path | list[Path]) -> Compiled:
     splits, examined = generate_examined(spec, training, listed)
     report = audit(spec, training, splits, examined)
     report["blind_best"] = blind_best(spec, training, splits.tasks)
+    report["guessable"] = guessable(spec, report["blind_best"])
     return Compiled.of(spec, splits, training, report)
 
 

@@ -22,7 +22,7 @@ def summary(compiled: Compiled, changes: str = "") -> str:
              "          " + "".join(f"{level:>6}" for level in LEVELS)]
     for scene, counts in report["counts"].items():
         lines.append(f"{scene:<10}" + "".join(f"{counts[level]:>6}" for level in LEVELS))
-    lines += _blind_best_text(report["blind_best"])
+    lines += _blind_best_text(report["blind_best"], report["guessable"])
     lines += _motion_text(compiled)
     lines += _rules_text(report["split_rules"])
     same = report["same_behaviour"]
@@ -37,15 +37,22 @@ def summary(compiled: Compiled, changes: str = "") -> str:
     return "\n".join(lines) + "\n" + changes
 
 
-def _blind_best_text(best: dict) -> list[str]:
-    """Per scene and level, the Intent and completion of the best language-blind guess."""
-    lines = ["", ("the best language-blind guess, IS / CR (on each layout the one training "
-                  "behaviour that earns most over the cell's tests; chance is a uniform guess):"),
-             "          " + "".join(f"{level:>12}" for level in LEVELS)]
+def _blind_best_text(best: dict, guessable: list[dict]) -> list[str]:
+    """Per scene and level, the best language-blind guess against chance, Intent and
+    completion; then the cells the guess margin flags."""
+    lines = ["", ("the best language-blind guess / chance, IS and CR (on each layout the one "
+                  "training behaviour that earns most over the cell's tests / a uniform "
+                  "guess among those the layout allows):"),
+             "             " + "".join(f"{level:>12}" for level in LEVELS)]
     for scene, levels in best.items():
-        lines.append((f"{scene:<10}" + "".join(
-            f"{levels[level]['IS']:>6.1f}/{levels[level]['CR']:<5.1f}" if level in levels
-            else f"{'.':>12}" for level in LEVELS)).rstrip())
+        for metric in ("IS", "CR"):
+            lines.append((f"{scene:<10}{metric:>3}" + "".join(
+                f"{levels[level][metric]:>6.1f}/{levels[level][f'chance_{metric}']:<5.1f}"
+                if level in levels else f"{'.':>12}" for level in LEVELS)).rstrip())
+    lines.append("guessable cells (the best guess more than the scene's guess_margin over "
+                 f"chance): {len(guessable) or 'none'}")
+    lines += [f"  {cell['scene']} {cell['level']}: {cell['IS']:.1f} against chance "
+              f"{cell['chance_IS']:.1f} (margin {cell['margin']:g})" for cell in guessable]
     return lines
 
 

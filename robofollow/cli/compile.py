@@ -30,6 +30,10 @@ def add_compile(commands) -> None:
                              "round per task")
     verify.add_argument("--no-verify", action="store_true",
                         help="skip the simulation check, also for scenes not in splits.lock")
+    p.add_argument("--strict", action="store_true",
+                   help="treat the warnings as errors: a cell whose best language-blind guess "
+                        "exceeds chance by more than the scene's guess_margin fails the build "
+                        "(exit status 1)")
     p.add_argument("--update-lock", action="store_true",
                    help="pin every scene's split digest and task counts in SPECS/splits.lock "
                         "(a clean build only)")
@@ -59,6 +63,7 @@ def cmd_compile(args) -> int:
     compiled = compile_specs(specs)
     changed = write(compiled, Path(args.out))
     print(summary(compiled, changed), end="")
+    warnings = _guess_warnings(compiled)
     print(f"written to {args.out}")
     check = check_lock(compiled, locked)
     if check.lines:
@@ -73,13 +78,26 @@ def cmd_compile(args) -> int:
         verified = _verify(compiled, specs, 1, args.workers, check.unlocked)
     else:
         verified = True
-    ok = clean(compiled) and verified
+    ok = clean(compiled) and verified and not (args.strict and warnings)
+    if args.strict and warnings:
+        print(f"--strict: {counted(len(warnings), 'warning')} fail the build")
     if args.update_lock and ok:
         write_lock(lock, compiled)
         print(f"pinned the splits of {counted(len(compiled.spec.scenes), 'scene')} in {lock}")
     elif args.update_lock:
         print(f"{lock} left as it was: the build has findings or failed verification")
     return 0 if ok else 1
+
+
+def _guess_warnings(compiled) -> list:
+    """The located warnings of the cells a language-blind guess passes too easily, printed
+    to standard error."""
+    from robofollow.benchmark.guessing import guess_warnings
+
+    warnings = guess_warnings(compiled.spec, compiled.report["guessable"])
+    for warning in warnings:
+        print(warning.render(), file=sys.stderr)
+    return warnings
 
 
 def _verify(compiled, specs: Path, rounds: int, workers: int | None,
@@ -147,6 +165,7 @@ def cmd_audit(args) -> int:
         print(json.dumps(report, indent=1, sort_keys=True))
     else:
         print(summary(compiled), end="")
+        _guess_warnings(compiled)
         if listed is not None:
             print(_task_list_text(args.tasks, listed), end="")
     return 0 if clean(compiled) and not (listed and listed["findings"]) else 1

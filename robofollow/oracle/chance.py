@@ -103,17 +103,14 @@ def available_behaviours(world: World, training: Mapping[str, Behaviour]) -> lis
                    for s in behaviour.steps)]
 
 
-def best_guess(asked: Sequence[Behaviour], choices: Sequence[Behaviour],
-               profile: ScoringProfile = DEFAULT_PROFILE) -> dict[str, float]:
-    """The most Intent ("IS", 0-1 each) and completions ("CR", 0 or 1 each), summed over
-    `asked`, that one of `choices`, performed perfectly for every one of them, earns: what a
-    policy that cannot tell the asked behaviours apart earns at best (each maximised alone)."""
+def earnings(asked: Sequence[Behaviour], choices: Sequence[Behaviour],
+             profile: ScoringProfile = DEFAULT_PROFILE) -> list[list[tuple[float, bool]]]:
+    """For each of `choices` performed perfectly, what it earns on each of `asked`: its Intent
+    (0-1) and whether it completes it."""
     asked_checks = [_intent_checks(behaviour, profile) for behaviour in asked]
-    best = {"IS": 0.0, "CR": 0.0}
+    found = []
     for choice in choices:
         performed = _intent_checks(choice, profile)
-        best["IS"] = max(best["IS"], sum(_earned(c, performed) for c in asked_checks))
-        best["CR"] = max(best["CR"], float(sum(
-            _completes(a, c, performed, profile) for a, c in zip(asked, asked_checks,
-                                                                 strict=True))))
-    return {metric: round(value, 6) for metric, value in best.items()}
+        found.append([(_earned(checks, performed), _completes(a, checks, performed, profile))
+                      for a, checks in zip(asked, asked_checks, strict=True)])
+    return found

@@ -118,7 +118,10 @@ def _reread(file: str) -> tuple[str, ...]:
 
 
 def spec_error(code: str, message: str, where: Source, sources: Sources,
-               length: int = 1, hints: tuple[str, ...] = ()) -> SpecError:
-    """A SpecError at `where`, showing its source line (and `hints` under it)."""
+               length: int = 1, hints: tuple[str, ...] = (),
+               severity: str = "error") -> SpecError:
+    """A SpecError (or a warning) at `where`, showing its source line (and `hints` under
+    it)."""
     return SpecError(code, message, file=where.file, line=where.line, column=where.column,
-                     source_line=sources.line(where), length=length, hints=hints)
+                     source_line=sources.line(where), length=length, hints=hints,
+                     severity=severity)

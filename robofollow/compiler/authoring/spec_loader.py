@@ -53,6 +53,8 @@ from robofollow.compiler.scene.behaviour import Step
 from robofollow.compiler.scene.observation import misnamed_twin
 from robofollow.compiler.scene.spec import (
     FRICTION_RANGE,
+    GUESS_MARGIN,
+    GUESS_MARGIN_RANGE,
     HALF_EXTENT_RANGE,
     MASS_RANGE,
     MAX_BODIES,
@@ -82,8 +84,9 @@ _SIZES = {
 }
 _COMMON = ("color", "rgb")
 _PHYSICS = ("mass", "friction")
-_SETTINGS = {"table_height": TABLE_HEIGHT}
-_SETTING_RANGES = {"table_height": (TABLE_HEIGHT_RANGE, " m")}
+_SETTINGS = {"table_height": TABLE_HEIGHT, "guess_margin": GUESS_MARGIN}
+_SETTING_RANGES = {"table_height": (TABLE_HEIGHT_RANGE, " m"),
+                   "guess_margin": (GUESS_MARGIN_RANGE, " Intent points")}
 
 
 @dataclass
@@ -219,7 +222,7 @@ class _Loader(SplitChecks):
                                    or any(body in self.broken for body in layouts[layout].placed)}
         scene = Scene(id=str(name), title=title[1:-1], bodies=bodies, points=points,
                       jitter=jitter, layouts=layouts, tasks=tasks, splits=splits, tests=tests,
-                      table_height=table)
+                      table_height=table, guess_margin=settings["guess_margin"])
         self.repeated_layouts(scene, {str(item.name): item.name for item in layout_nodes},
                               self.suspect[scene.id])
         return scene

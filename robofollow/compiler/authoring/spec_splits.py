@@ -67,7 +67,7 @@ class SplitChecks(Checks):
                 choice = self.split_choice(found[key], str(item.level))
                 if choice is not None:
                     values[key] = choice
-        return SplitRule(**values)
+        return SplitRule(**values, source=self.source(item.level))
 
     def split_choice(self, node: Attribute, level: str) -> str | None:
         """A split rule's `motion=` or `repeats=`: one of its choices, on a level of changed

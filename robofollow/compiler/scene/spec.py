@@ -47,6 +47,9 @@ MAX_ROUNDS = 100  # `split ... rounds=`: rounds per test task
 MAX_TASKS = 1000  # `split ... max=`: test tasks kept per level
 MAX_SEED = 2_000_000_000  # `split ... seed=`: an episode's seed (seed + 100 x round + an
 #   offset below 1000, splits.episode_seed) stays below 2**31
+GUESS_MARGIN = 15.0  # Intent points: how far a cell's best language-blind guess may rise above
+#   chance before the compile warns that the cell tells following from guessing poorly
+GUESS_MARGIN_RANGE = (0.0, 100.0)  # Intent points (`set guess_margin`)
 MAX_BODIES = 64  # objects and fixtures per scene
 MAX_LAYOUTS = 256  # layouts per scene (a layout may derive from another: `layout b from a`)
 MAX_STACK = 8  # bodies resting on (or in) one another, counting the one on the table
@@ -174,6 +177,7 @@ class SplitRule(Model):
     motion: Literal["any", "moved"] = "any"
     # L1 / L3: "allowed" lets the rule name a layout that looks the same as a training layout
     repeats: Literal["refused", "allowed"] = "refused"
+    source: Source | None = None  # where the rule is written (left out of the scene's digest)
 
 
 _LATER_SPLIT_FIELDS = ("motion", "repeats")  # left out of a scene's digest at their defaults
@@ -190,6 +194,7 @@ class Scene(Model):
     splits: dict[str, SplitRule]
     tests: tuple[ListedTest, ...] = ()
     table_height: float = TABLE_HEIGHT
+    guess_margin: float = GUESS_MARGIN  # Intent points (`set guess_margin`)
 
     def jitter_of(self, body: str) -> Jitter:
         return self.jitter.get(body) or self.jitter.get("*") or Jitter()
@@ -204,15 +209,14 @@ class Scene(Model):
         """sha256 over what the scene says (not where: file names and lines are left out), so
         a scene compiled alone or beside others, from any folder, has one digest. A split
         rule's default motion ("any") and repeats ("refused") are left out, and so are the
-        colours of a layout that recolours nothing, as before these existed."""
+        colours of a layout that recolours nothing, as before these existed. The guess margin
+        is left out: it decides no split and no episode, only a warning."""
         exclude: dict = {"tasks": {"__all__": {"source", "paraphrase_sources"}},
-                         "tests": {"__all__": {"source"}}}
-        defaults = {level: {key for key in _LATER_SPLIT_FIELDS
-                            if getattr(rule, key) == SplitRule.model_fields[key].default}
-                    for level, rule in self.splits.items()}
-        defaults = {level: keys for level, keys in defaults.items() if keys}
-        if defaults:
-            exclude["splits"] = defaults
+                         "tests": {"__all__": {"source"}}, "guess_margin": True}
+        exclude["splits"] = {level: {"source"} | {
+            key for key in _LATER_SPLIT_FIELDS
+            if getattr(rule, key) == SplitRule.model_fields[key].default}
+            for level, rule in self.splits.items()}
         uncoloured = {name: {"colours"} for name, layout in self.layouts.items()
                       if not layout.colours}
         if uncoloured:
