@@ -171,6 +171,7 @@ def test_a_capped_level_gives_a_new_layout_its_share_and_displaces_no_more(tmp_p
 def test_a_split_asking_for_moved_tasks_keeps_only_moved_l1_and_l3_tasks(tmp_path):
     """`motion=moved` on L1 rejects the as-trained candidates with the reason; L3 rewords only
     the kept L1 tasks, so it has no as-trained task either."""
+    from robofollow.benchmark.labels import object_moved
     from robofollow.benchmark.pipeline import compile_specs
     from robofollow.benchmark.summary import summary
 
@@ -183,17 +184,21 @@ def test_a_split_asking_for_moved_tasks_keeps_only_moved_l1_and_l3_tasks(tmp_pat
     lines = text.splitlines()
     head = next(i for i, line in enumerate(lines) if "L1 as-trained" in line)
     counts = lines[head + 1].split()
-    assert counts == ["scene1"] + [str(sum(1 for t in every.of("scene1", level)
-                                           if t.motion == kind))
-                                   for level in ("L1", "L3") for kind in ("moved", "as-trained")]
-    assert counts[1:3] == ["8", "7"]  # the shipped split: 7 of scene1's 15 L1 tasks as trained
+    moved_objects = {level: sum(1 for t in every.of("scene1", level) if t.motion == "moved"
+                                and object_moved(compiled.spec.scenes["scene1"], t,
+                                                 compiled.training))
+                     for level in ("L1", "L3")}
+    assert counts == ["scene1"] + [str(value) for level in ("L1", "L3") for value in (
+        sum(1 for t in every.of("scene1", level) if t.motion == "moved"), moved_objects[level],
+        sum(1 for t in every.of("scene1", level) if t.motion == "as-trained"))]
+    assert counts[1:4] == ["8", "8", "7"]  # the shipped split: 7 of 15 L1 tasks as trained
     assert {t.motion for t in every.of("scene1", "L1")} == {"moved", "as-trained"}
     text = (SPECS / "scene1.rf").read_text()
     assert rule in text
     (tmp_path / "scene1.rf").write_text(text.replace(rule, rule + " motion=moved", 1))
     compiled = compile_specs(tmp_path)
     moved = compiled.splits
-    assert "scene1             8               0" in summary(compiled)
+    assert f"{'scene1':<10}{8:>10}{8:>14}{0:>16}" in summary(compiled)  # moved, object, trained
     assert moved.of("scene1", "L1") and moved.of("scene1", "L3")
     assert {t.motion for level in ("L1", "L3") for t in moved.of("scene1", level)} == {"moved"}
     assert ({t.id for t in moved.of("scene1", "L1")}

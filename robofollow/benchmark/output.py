@@ -20,6 +20,7 @@ import secrets
 import shutil
 from pathlib import Path
 
+from robofollow.benchmark.labels import labels
 from robofollow.benchmark.pipeline import Compiled
 from robofollow.benchmark.rounds import episode_lines
 from robofollow.benchmark.summary import changes, summary
@@ -221,8 +222,9 @@ def _write_files(compiled: Compiled, out: Path, changed: str) -> None:
                     goal, points = goals_and_plans.of(task.behaviour, task.layout)
                     f.write(_line({"task": task.id, "origin": task.origin,
                                    "wording": task.wording, "layout": task.layout,
-                                   "instruction": task.instruction, "goal": goal,
-                                   "plan": points}))
+                                   "instruction": task.instruction,
+                                   **labels(goals_and_plans.scene, task, compiled.training),
+                                   "goal": goal, "plan": points}))
     with open(out / "rejected.jsonl", "w", encoding="utf-8") as f:
         f.writelines(_line(r.model_dump(mode="json")) for r in compiled.splits.rejected)
     (out / "audit.json").write_text(compiled.audit_json, encoding="utf-8")

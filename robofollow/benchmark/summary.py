@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from robofollow.audit.splits import FINDING_KEYS
+from robofollow.benchmark.labels import object_moved
 from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.scene.spec import LEVELS, MOTION_LEVELS
 from robofollow.errors import counted
@@ -58,18 +59,21 @@ def _blind_best_text(best: dict, guessable: list[dict]) -> list[str]:
 
 def _motion_text(compiled: Compiled) -> list[str]:
     """Per scene, how many L1 and L3 tasks are moved (the expert moves otherwise than in the
-    training task) and how many as-trained (it moves as trained)."""
+    training task) and how many as-trained (it moves as trained), and of the moved ones how
+    many also move their object (labels.py: the two labels answer different questions)."""
     lines = ["", ("L1 and L3 tasks by motion (moved: the expert moves otherwise than in the "
-                  "training task):"),
-             "          " + "".join(f"{f'{level} moved':>10}{f'{level} as-trained':>16}"
-                                    for level in MOTION_LEVELS)]
-    for scene in compiled.spec.scenes:
-        tasks = [t for t in compiled.splits.tasks if t.scene == scene]
-        counts = [sum(1 for t in tasks if t.level == level and t.motion == kind)
-                  for level in MOTION_LEVELS for kind in ("moved", "as-trained")]
-        lines.append(f"{scene:<10}" + "".join(
-            f"{moved:>10}{trained:>16}" for moved, trained in zip(counts[::2], counts[1::2],
-                                                                  strict=True)))
+                  "training task; of those, object moved: a handled body stands elsewhere):"),
+             "          " + "".join(f"{f'{level} moved':>10}{'object moved':>14}"
+                                    f"{f'{level} as-trained':>16}" for level in MOTION_LEVELS)]
+    for scene_id, scene in compiled.spec.scenes.items():
+        row = ""
+        for level in MOTION_LEVELS:
+            tasks = compiled.splits.of(scene_id, level)
+            moved = [t for t in tasks if t.motion == "moved"]
+            shifted = sum(bool(object_moved(scene, t, compiled.training)) for t in moved)
+            trained = sum(1 for t in tasks if t.motion == "as-trained")
+            row += f"{len(moved):>10}{shifted:>14}{trained:>16}"
+        lines.append(f"{scene_id:<10}{row}")
     listed = sum(1 for t in compiled.splits.tasks if t.level in MOTION_LEVELS and t.motion is None)
     if listed:
         lines.append(f"  (and {listed} listed L1/L3 tests, whose motion is not classified)")
