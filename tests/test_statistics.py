@@ -214,3 +214,47 @@ def test_a_comparison_page_escapes_the_run_names(tmp_path):
     assert main(["compare", str(a), str(b), "--out", str(out)]) == 0
     page = (out / "compare.html").read_text()
     assert "<script>" not in page and "&lt;script&gt;alert(1)" in page
+
+
+def test_the_power_a_pilot_reaches_is_the_share_of_simulated_comparisons_that_detect_delta(
+        tmp_path):
+    """`reached`: the power of the pilot's own tasks and rounds, checked by simulating paired
+    comparisons of that size (one pilot: a difference varies like two runs' scores)."""
+    from robofollow.eval.statistics.power import plan
+
+    tasks, rounds, between, within, delta = 30, 4, 0.05, 0.2, 0.08
+    (entry,) = plan([run_scores(_pilot(tmp_path, "pilot", between, within, tasks, rounds,
+                                       seed=5))], 100 * delta)
+    rng = np.random.default_rng(7)
+    simulations, detected = 200, 0
+    for _ in range(simulations):
+        scores = [rng.normal(0, entry["between_sd"] / 100, tasks)[:, None]
+                  + rng.normal(0, entry["within_sd"] / 100, (tasks, rounds)) for _ in "ab"]
+        differences = (scores[0] - scores[1]).mean(axis=1) + delta
+        detected += paired_test(differences, np.ones(tasks)).p < 0.05
+    assert 0.2 < entry["reached"] < 0.95
+    assert abs(detected / simulations - entry["reached"]) < 0.15, (detected, entry)
+    # more rounds than the pilot's were needed exactly when the pilot falls short of 80%
+    assert (entry["rounds"] is not None and entry["rounds"] <= rounds) == (entry["reached"] >= 0.8)
+
+
+def test_a_plan_by_cell_has_a_row_per_scene_and_level_and_says_what_each_reaches(tmp_path):
+    from robofollow.eval.statistics.power import plan
+
+    calm = run_scores(_pilot(tmp_path, "calm", between=0.02, within=0.1, seed=1))
+    wild = [dict(row, scene="scene2", episode=row["episode"].replace("scene1", "scene2"),
+                 task=row["task"].replace("scene1", "scene2"))
+            for row in run_scores(_pilot(tmp_path, "wild", between=0.3, within=0.1, seed=2))]
+    entries = plan([calm + wild], 10.0, by="cell")
+    assert [e["cell"] for e in entries] == ["scene1 L2", "scene2 L2"]
+    assert entries[0]["reached"] > 0.99 > 0.5 > entries[1]["reached"]
+    assert entries[1]["rounds"] is None and entries[1]["tasks_needed"] > 40
+
+
+def test_the_command_plans_by_cell_and_refuses_by_without_power(tmp_path, capsys):
+    pilot = _pilot(tmp_path, "pilot", between=0.02, within=0.2)
+    assert main(["compare", str(pilot), "--power", "10", "--by", "cell"]) == 0
+    out = capsys.readouterr().out
+    assert "| Cell | tasks |" in out and "| scene1 L2 | 40 | 10 |" in out and "power reached" in out
+    assert main(["compare", str(pilot), str(pilot), "--by", "cell"]) == 2
+    assert "--by shape the plan --power makes" in capsys.readouterr().err

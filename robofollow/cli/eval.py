@@ -23,7 +23,12 @@ from robofollow.compiler.scene.spec import LEVELS, MOTION_LEVELS, ROUNDS
 from robofollow.errors import RoboFollowError, UsageError
 from robofollow.eval.protocols.limits import CALL_TIMEOUT_S, MAX_MESSAGE_BYTES
 from robofollow.eval.running.deadline import DEFAULT_POLICY_TIMEOUT
-from robofollow.eval.running.modes import EXPORTS, INSTRUCTION_MODES, VIDEO_MODES
+from robofollow.eval.running.modes import (
+    EXPORTS,
+    INSTRUCTION_MODES,
+    POWER_GROUPS,
+    VIDEO_MODES,
+)
 from robofollow.sim import CHUNK
 from robofollow.workers import EXECUTORS
 
@@ -391,6 +396,10 @@ def add_compare(commands) -> None:
                         "run's variance or, better, from two pilot runs' paired differences")
     p.add_argument("--metric", choices=("IS", "ES", "CR"),
                    help="with --power: the metric planned for (default: IS)")
+    p.add_argument("--by", choices=POWER_GROUPS,
+                   help="with --power: plan for each level (default) or each scene x level "
+                        "cell, alpha split over them; each row says the power the pilot's own "
+                        "tasks and rounds reach")
     p.add_argument("--json", action="store_true", help="print the comparison as JSON")
     p.add_argument("--out", metavar="DIR", help="write compare.md, compare.html (with a forest "
                    "plot per metric) and compare.json here (one pair) or DIR/<A>-vs-<B>/ "
@@ -409,9 +418,9 @@ def cmd_compare(args) -> int:
     runs = [Path(run) for run in args.runs]
     if args.power is not None:
         return _plan(runs, args)
-    if args.metric is not None:
-        raise UsageError("--metric chooses the metric --power plans for; a comparison "
-                         "gives every metric")
+    if args.metric is not None or args.by is not None:
+        raise UsageError("--metric and --by shape the plan --power makes; a comparison "
+                         "gives every metric in every cell")
     if len(runs) < 2:
         raise UsageError("compare takes at least two runs: RUN_A RUN_B [RUN_C ...] (or "
                          "one or two pilot runs with --power DELTA)")
@@ -441,7 +450,8 @@ def _plan(runs: list[Path], args) -> int:
         raise UsageError("--out writes a comparison's files; --power prints a plan "
                          "(--json prints it as JSON)")
     metric = args.metric or "IS"
-    entries = plan([run_scores(run) for run in runs], args.power, metric)
+    entries = plan([run_scores(run) for run in runs], args.power, metric,
+                   by=args.by or "level")
     print(json.dumps(entries, indent=2) if args.json else
           plan_markdown([run.name for run in runs], args.power, metric, entries))
     return 0

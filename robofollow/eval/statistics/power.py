@@ -1,6 +1,8 @@
 """`robofollow compare --power DELTA PILOT [PILOT_B]`: how many rounds per task a comparison
-of two policies needs to tell apart a difference of DELTA points at each level, planned from a
-pilot run's variance, or better from two pilot runs' paired differences (docs/statistics.md).
+of two policies needs to tell apart a difference of DELTA points at each level (or, `--by
+cell`, in each scene x level cell), planned from a pilot run's variance, or better from two
+pilot runs' paired differences (docs/statistics.md); and the power the pilot's own tasks and
+rounds reach, Phi(DELTA / SE - z(1 - alpha / 2)), with SE^2 = k * (between + within / R) / T.
 
 A level's estimate is a mean over its tasks of each task's mean over its rounds, so its
 variance has two parts: how much tasks differ (between tasks, which only more tasks reduce)
@@ -32,9 +34,13 @@ from robofollow.eval.statistics.paired import FIELDS, pair
 MAX_ROUNDS = 1000  # a plan beyond this many rounds per task is reported as out of reach
 
 
-def _series(runs: list[list[dict]], metric: str) -> dict[str, dict[str, list[float]]]:
-    """Per level and task, the pilot's values in points: one run's scores, or two runs'
-    paired differences (A - B, episodes paired by id)."""
+def _key(row: dict, by: str) -> str:
+    return row["level"] if by == "level" else f"{row['scene']} {row['level']}"
+
+
+def _series(runs: list[list[dict]], metric: str, by: str) -> dict[str, dict[str, list[float]]]:
+    """Per group (level or cell) and task, the pilot's values in points: one run's scores, or
+    two runs' paired differences (A - B, episodes paired by id)."""
     episodes: dict[str, dict[str, list[float]]] = defaultdict(lambda: defaultdict(list))
     if len(runs) == 1:
         rows = [(row, 100.0 * float(row[FIELDS[metric]])) for row in runs[0]]
@@ -43,34 +49,45 @@ def _series(runs: list[list[dict]], metric: str) -> dict[str, dict[str, list[flo
         rows = [(a, 100.0 * (float(a[FIELDS[metric]]) - float(b[FIELDS[metric]])))
                 for a, b in pairing.pairs]
     for row, value in rows:
-        episodes[row["level"]][row["task"]].append(value)
+        episodes[_key(row, by)][row["task"]].append(value)
     return episodes
 
 
+def _order(group: str) -> tuple:
+    """Groups in Table 1's order: by scene, then level (a level alone: by level)."""
+    *scene, level = group.split(" ")
+    return (*scene, LEVELS.index(level) if level in LEVELS else len(LEVELS))
+
+
 def plan(runs: list[list[dict]], delta: float, metric: str = "IS", power: float = 0.8,
-         alpha: float = 0.05) -> list[dict]:
-    """Per level of the pilot (one run's scores, or two runs' to plan from their paired
-    differences; rows as comparison.run_scores gives them): its tasks, rounds, the two
-    standard deviations (points) and the rounds per task needed
-    ("rounds": None where rounds alone cannot do it, with "tasks_needed": how many tasks
-    unlimited rounds would need)."""
-    episodes = _series(runs, metric)
+         alpha: float = 0.05, by: str = "level") -> list[dict]:
+    """Per level (or, `by="cell"`, per scene x level cell) of the pilot (one run's scores, or
+    two runs' to plan from their paired differences; rows as comparison.run_scores gives
+    them): its tasks, rounds, the two standard deviations (points), the rounds per task
+    needed ("rounds": None where rounds alone cannot do it, with "tasks_needed": how many
+    tasks unlimited rounds would need) and the power its own tasks and rounds reach
+    ("reached")."""
+    episodes = _series(runs, metric, by)
     twice = 2.0 if len(runs) == 1 else 1.0  # one run: a difference varies like two
-    levels = [level for level in LEVELS if level in episodes]
-    z = stats.norm.ppf(1 - alpha / (2 * max(len(levels), 1))) + stats.norm.ppf(power)
+    groups = sorted(episodes, key=_order)
+    level_z = stats.norm.ppf(1 - alpha / (2 * max(len(groups), 1)))
+    z = level_z + stats.norm.ppf(power)
     target = (delta / z) ** 2  # the variance the difference may have
     found = []
-    for level in levels:
-        tasks = list(episodes[level].values())
+    for group in groups:
+        tasks = list(episodes[group].values())
         count = len(tasks)
         rounds = float(np.mean([len(t) for t in tasks]))
         within = (float(np.mean([np.var(t, ddof=1) for t in tasks if len(t) > 1]))
                   if any(len(t) > 1 for t in tasks) else 0.0)
         means = [np.mean(t) for t in tasks]
         between = max(float(np.var(means, ddof=1)) - within / rounds, 0.0) if count > 1 else 0.0
-        entry = {"level": level, "tasks": count, "pilot_rounds": rounds,
+        variance = twice * (between + within / rounds) / count
+        reached = (float(stats.norm.cdf(delta / math.sqrt(variance) - level_z)) if variance > 0
+                   else 1.0)
+        entry = {by: group, "tasks": count, "pilot_rounds": rounds,
                  "between_sd": math.sqrt(between), "within_sd": math.sqrt(within),
-                 "rounds": None, "tasks_needed": None}
+                 "rounds": None, "tasks_needed": None, "reached": reached}
         room = count * target - twice * between
         needed = math.ceil(twice * within / room) if room > 0 else None
         if needed is not None and needed <= MAX_ROUNDS:
@@ -83,13 +100,15 @@ def plan(runs: list[list[dict]], delta: float, metric: str = "IS", power: float 
 
 def plan_markdown(runs: list[str], delta: float, metric: str, entries: list[dict]) -> str:
     """The plan as a markdown table."""
+    by = "cell" if entries and "cell" in entries[0] else "level"
     pilot = (f"{runs[0]} as the pilot; a paired difference taken to vary like one "
              "policy's scores twice over" if len(runs) == 1 else
              f"the paired differences {runs[0]} − {runs[1]} as the pilot")
     lines = [f"# Rounds per task to tell apart {delta:g} points of {metric}", "",
-             f"80% power, 5% two-sided split over the levels; {pilot} (docs/statistics.md).", "",
-             ("| Level | tasks | pilot rounds | SD between tasks | SD within a task | rounds "
-              "per task needed |"), "|---|---:|---:|---:|---:|---|"]
+             f"80% power, 5% two-sided split over the {by}s; {pilot} (docs/statistics.md).",
+             "", (f"| {by.capitalize()} | tasks | pilot rounds | SD between tasks | SD within a "
+                  "task | power reached | rounds per task needed |"),
+             "|---|---:|---:|---:|---:|---:|---|"]
     for e in entries:
         if e["rounds"] is not None:
             needed = str(e["rounds"])
@@ -98,6 +117,7 @@ def plan_markdown(runs: list[str], delta: float, metric: str, entries: list[dict
                       f"{e['tasks_needed']} tasks would be needed")
         else:
             needed = "out of reach"
-        lines.append(f"| {e['level']} | {e['tasks']} | {e['pilot_rounds']:g} | "
-                     f"{e['between_sd']:.1f} | {e['within_sd']:.1f} | {needed} |")
+        lines.append(f"| {e[by]} | {e['tasks']} | {e['pilot_rounds']:g} | "
+                     f"{e['between_sd']:.1f} | {e['within_sd']:.1f} | "
+                     f"{100 * e['reached']:.0f}% | {needed} |")
     return "\n".join(lines) + "\n"
