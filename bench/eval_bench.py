@@ -33,6 +33,7 @@ import numpy as np
 import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
 from robofollow.benchmark.pipeline import compile_specs
 from robofollow.benchmark.rounds import all_episodes
+from robofollow.compiled_cache import load
 from robofollow.eval.policies.reference import ExpertPolicy
 from robofollow.eval.running.runner import EvalOptions, evaluate, read_results
 from robofollow.resources import builtin_specs
@@ -58,7 +59,7 @@ def _sample(count: int) -> list[str]:
 
 
 def _child(policy: str, episode_ids: list[str], workers: int, queue) -> None:
-    compiled = compile_specs(builtin_specs())
+    compiled = load(builtin_specs())  # the cached benchmark, as `robofollow eval` reads it
     tasks = tuple(episode_id.partition("#")[0] for episode_id in episode_ids)
     with tempfile.TemporaryDirectory() as folder:
         out = Path(folder) / "run"

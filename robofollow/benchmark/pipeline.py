@@ -5,6 +5,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import time
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property, lru_cache
@@ -100,6 +101,15 @@ def _compile_cached(specs: Path, _mtimes: tuple) -> Compiled:
 def _compile(specs: Path | list[Path]) -> Compiled:
     """Every error of the specs in one report: loading, training tasks, listed tests (the
     checks of tasks on layouts that failed to load are skipped rather than repeated)."""
+    return compile_timed(specs)[0]
+
+
+def compile_timed(specs: Path | list[Path]) -> tuple[Compiled, dict[str, float]]:
+    """A compile (never cached), with the seconds each phase took: loading and checking the
+    specs (parsing and grounding the training tasks), generating the splits, and the audit
+    (the best blind guesses included). What bench/compile_bench.py times."""
+    seconds: dict[str, float] = {}
+    started = time.perf_counter()
     loaded = load_partial(specs)
     if loaded.spec is None:
         raise SpecErrors(loaded.errors)
@@ -109,11 +119,16 @@ def _compile(specs: Path | list[Path]) -> Compiled:
     errors = loaded.errors + training_errors + test_errors
     if errors:
         raise SpecErrors(errors)
+    seconds["load and check"] = time.perf_counter() - started
+    mark = time.perf_counter()
     splits, examined = generate_examined(spec, training, listed)
+    seconds["generate splits"] = time.perf_counter() - mark
+    mark = time.perf_counter()
     report = audit(spec, training, splits, examined)
     report["blind_best"] = blind_best(spec, training, splits.tasks)
     report["guessable"] = guessable(spec, report["blind_best"])
-    return Compiled.of(spec, splits, training, report)
+    seconds["audit"] = time.perf_counter() - mark
+    return Compiled.of(spec, splits, training, report), seconds
 
 
 def clean(compiled: Compiled) -> bool:
