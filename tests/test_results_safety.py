@@ -84,24 +84,21 @@ def test_resume_does_not_append_through_a_linked_episode_file(finished, tmp_path
     assert outside.read_bytes() == before
 
 
-def test_a_shard_resumed_without_its_shard_is_refused(tmp_path, capsys):
-    run = tmp_path / "s1"
-    assert main(["eval", *RUN, "--shard", "1/2", "--out", str(run)]) == 0
-    (run / "summary.json").unlink()  # (as if interrupted)
-    capsys.readouterr()
-    assert main(["eval", *RUN, "--out", str(run), "--resume"]) == 1
-    err = capsys.readouterr().err
-    assert "was run with other options (shard differ)" in err, err
-    assert json.loads((run / "run.json").read_text())["shard"] == "1/2"
-
-
-def test_a_run_resumed_with_other_control_arms_is_refused(tmp_path, capsys):
+@pytest.mark.parametrize(("option", "value", "recorded"), [
+    ("--shard", "1/2", "1/2"),  # a shard resumed without its shard
+    ("--controls", "empty", ["empty"]),  # a run resumed with other control arms
+])
+def test_a_run_resumed_without_an_option_it_was_run_with_is_refused(tmp_path, capsys, option,
+                                                                       value, recorded):
     run = tmp_path / "run"
-    assert main(["eval", *RUN, "--controls", "empty", "--out", str(run)]) == 0
+    assert main(["eval", *RUN, option, value, "--out", str(run)]) == 0
     (run / "summary.json").unlink()  # (as if interrupted)
     capsys.readouterr()
     assert main(["eval", *RUN, "--out", str(run), "--resume"]) == 1
-    assert "was run with other options (controls differ)" in capsys.readouterr().err
+    key = option.removeprefix("--")
+    err = capsys.readouterr().err
+    assert f"was run with other options ({key} differ)" in err, err
+    assert json.loads((run / "run.json").read_text())[key] == recorded
 
 
 def test_merge_joins_the_shards_control_arms(tmp_path, capsys):

@@ -14,7 +14,7 @@ from collections.abc import Iterable, Mapping
 
 from robofollow.compiler.authoring.spec_files import Sources, spec_error
 from robofollow.compiler.scene.behaviour import Behaviour
-from robofollow.compiler.scene.spec import LEVELS, Spec, scene_behaviours
+from robofollow.compiler.scene.spec import LEVELS, Scene, Spec, scene_behaviours
 from robofollow.compiler.scene.world import World
 from robofollow.compiler.splits.generator import TestTask
 from robofollow.errors import SpecError
@@ -45,7 +45,7 @@ def blind_best(spec: Spec, training: Mapping[str, Behaviour],
     return found
 
 
-def _cell(scene, candidates: Mapping[str, Behaviour],
+def _cell(scene: Scene, candidates: Mapping[str, Behaviour],
           layouts: Mapping[str, list[TestTask]]) -> dict:
     """One cell: the sums over its layouts, then per-task means (0-100)."""
     totals = {"IS": 0.0, "CR": 0.0, "chance_IS": 0.0, "chance_CR": 0.0}
@@ -57,17 +57,17 @@ def _cell(scene, candidates: Mapping[str, Behaviour],
         if not table:
             continue
         intents = [sum(intent for intent, _ in row) for row in table]
-        chance = sum(intents) / len(table)  # a uniform guess, summed over the layout's tasks
-        totals["IS"] += max(intents)
+        most, chance = max(intents), sum(intents) / len(table)  # chance: a uniform guess
+        totals["IS"] += most
         totals["CR"] += max(float(sum(done for _, done in row)) for row in table)
         totals["chance_IS"] += chance
         totals["chance_CR"] += sum(done for row in table for _, done in row) / len(table)
-        best = intents.index(max(intents))
+        best = intents.index(most)
         earning = [task.id for task, (intent, _) in zip(asked, table[best], strict=True)
                    if intent >= EARNING]
-        shown.append((max(intents) - chance, {
+        shown.append((most - chance, {
             "layout": layout, "guess": labels[best], "tests": len(asked),
-            "guess_IS": round(100 * max(intents) / len(asked), 1),
+            "guess_IS": round(100 * most / len(asked), 1),
             "chance_IS": round(100 * chance / len(asked), 1),
             "earning": len(earning), "earning_tests": earning[:NAMED_TESTS]}))
     count = sum(len(asked) for asked in layouts.values())
