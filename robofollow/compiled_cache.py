@@ -45,7 +45,8 @@ KEEP = 64  # cache files kept (the newest); older ones are removed when one is w
 # the code the compile runs, under robofollow/ (a test checks that these are the modules the
 # cached compile imports, and beside them only the rest of the compiler): a change to it, and
 # only to it, compiles again
-SOURCES = ("benchmark/__init__.py", "benchmark/episode.py", "benchmark/guessing.py",
+SOURCES = ("benchmark/__init__.py", "benchmark/episode.py", "benchmark/episode_hash.py",
+           "benchmark/guessing.py",
            "benchmark/pipeline.py", "benchmark/rounds.py", "compiled_cache.py", "errors.py",
            "resources.py", "files.py", "oracle/__init__.py", "oracle/chance.py", "compiler",
            "audit")
@@ -65,12 +66,15 @@ class Part:
 @dataclass(frozen=True)
 class Episodes:
     """The spec, the training behaviours and every episode (in `benchmark.rounds.all_episodes`
-    order), each parsed when asked for (a fresh object every time)."""
+    order), each parsed when asked for (a fresh object every time); `release` names the frozen
+    release they were read from, with its digest (None: a working compile of specs)."""
 
     spec: Spec
     training: dict[str, Behaviour]
     ids: tuple[str, ...]
     lines: tuple[bytes, ...]
+    release: str | None = None
+    release_digest: str | None = None
 
     @cached_property
     def index(self) -> dict[str, int]:

@@ -1,5 +1,5 @@
-"""Files shipped with the package (the grammars and the built-in benchmark specs), and where
-RoboFollow keeps what it caches."""
+"""Files shipped with the package (the grammars, the built-in benchmark specs and its frozen
+releases), and where RoboFollow keeps what it caches."""
 
 from __future__ import annotations
 
@@ -25,6 +25,12 @@ def builtin_specs() -> Path:
     """The folder of the benchmark's own .rf specs (installed with the package)."""
     packaged = Path(str(resources.files("robofollow").joinpath("specs")))
     return packaged if packaged.is_dir() else _SOURCE / "specs"
+
+
+def releases_dir() -> Path:
+    """The folder of the frozen benchmark releases (robofollow/releases, shipped in the
+    package)."""
+    return Path(__file__).resolve().parent / "releases"
 
 
 def cache_root() -> Path | None:

@@ -38,7 +38,7 @@ from robofollow.sim.expert import Expert
 from robofollow.sim.rollout import Rollout
 from robofollow.sim.stage import Stage
 from robofollow.trajectory import Trajectory
-from tests.sim_helpers import benchmark, episode
+from tests.sim_helpers import episode, shipped
 
 SETTLE = 40  # control steps held at the end of every script (the evaluation's budget holds)
 
@@ -48,8 +48,8 @@ class Script:
 
     def __init__(self, episode_id: str):
         self.record = episode(episode_id)
-        self.scene = benchmark().spec.scenes[self.record.scene]
-        self.rollout = Rollout(benchmark(), Stage(64, 48), self.record, render=False)
+        self.scene = shipped().spec.scenes[self.record.scene]
+        self.rollout = Rollout(shipped(), Stage(64, 48), self.record, render=False)
         self.sim, self.world = self.rollout.sim, self.rollout.world
         self.asked = self.record.behaviour
         self.expert = Expert(self.sim)
@@ -187,7 +187,7 @@ class Script:
         return self.rollout.recorder.trajectory()
 
     def score(self) -> EpisodeScore:
-        return score_recording(benchmark(), self.record, self.trajectory())
+        return score_recording(shipped(), self.record, self.trajectory())
 
 
 def analog(action: np.ndarray) -> np.ndarray:

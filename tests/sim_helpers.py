@@ -1,4 +1,6 @@
-"""Shared set-up for the simulation tests: the compiled built-in benchmark, once per session."""
+"""Shared set-up for the simulation tests: the working compile of the built-in specs (what the
+generator's tests read), and the release the shipped results and the judged catalogue's
+episodes were made on (what tests of recorded episodes read), each once per session."""
 
 from __future__ import annotations
 
@@ -8,10 +10,9 @@ import sys
 from contextlib import contextmanager
 from functools import lru_cache
 
-from robofollow import compiled_cache
+from robofollow import compiled_cache, release
 from robofollow.benchmark.episode import Episode
 from robofollow.benchmark.pipeline import Compiled, compile_specs
-from robofollow.benchmark.rounds import all_episodes
 from robofollow.resources import builtin_specs
 
 
@@ -26,13 +27,17 @@ def cached_benchmark() -> compiled_cache.Episodes:
     return compiled_cache.of(benchmark())
 
 
-@lru_cache(maxsize=1)
-def _episodes() -> dict[str, Episode]:
-    return {e.id: e for e in all_episodes(benchmark())}
+SHIPPED_RELEASE = "v1"  # the shipped results' and the judged catalogue's release
+
+
+def shipped() -> compiled_cache.Episodes:
+    """The release the shipped results and the judged catalogue's episodes were made on."""
+    return release.load(SHIPPED_RELEASE)
 
 
 def episode(episode_id: str) -> Episode:
-    return _episodes()[episode_id]
+    """A recorded episode by id, from the release it was recorded on."""
+    return shipped().record(episode_id)
 
 
 @contextmanager

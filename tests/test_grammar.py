@@ -43,12 +43,16 @@ def test_wheel_ships_the_grammar_and_parses_when_installed(tmp_path):
     assert {f"robofollow/specs/scene{i}.rf" for i in range(1, 5)} <= set(names)
     assert {"robofollow/baselines/scene2-text/policy.json",
             "robofollow/baselines/scene2-text/params.npz"} <= set(names)
+    assert {"robofollow/releases/v1/manifest.json",
+            "robofollow/releases/v1/benchmark.jsonl.gz"} <= set(names)
     target = tmp_path / "site"
     subprocess.run([sys.executable, "-m", "pip", "install", "--no-deps", "--target",
                     str(target), str(wheel)], check=True, capture_output=True)
     code = ("import robofollow, sys; from robofollow.compiler.language.parser import parse; "
             "from robofollow.resources import builtin_specs; "
             "assert builtin_specs().is_relative_to(robofollow.__path__[0]); "
+            "from robofollow import release; frozen = release.load(); "
+            "assert len(frozen.ids) == release.manifest(frozen.release).episodes; "
             "print(robofollow.__file__); print(parse('Pick up the red cube.').object.noun)")
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                             cwd=tmp_path, env={"PYTHONPATH": str(target), "PATH": ""})

@@ -37,7 +37,7 @@ from robofollow.eval.policies.reference import REFERENCE_POLICIES
 from robofollow.eval.running.episode import run_episode
 from robofollow.sim import robot
 from tests.judged import Script, analog, holding_on, released_higher, step_of, without
-from tests.sim_helpers import benchmark, episode
+from tests.sim_helpers import episode, shipped
 
 
 @dataclass(frozen=True)
@@ -104,7 +104,7 @@ def place(arm: str, source: str, relation: str, target: str, **extra) -> Behavio
 
 
 def training(label: str) -> Behaviour:
-    return benchmark().training[label]
+    return shipped().training[label]
 
 
 def offset_from(s: Script, body: str, dx: float, dy: float) -> tuple[float, float]:
@@ -592,7 +592,7 @@ class Overshooting:
 def test_over_limit_targets_are_clipped_and_counted_not_an_error(stage):
     """Judged: a policy overshooting limits its demonstrations touch performs the task: full
     marks, and the record counts the clipped actions."""
-    run = run_episode(benchmark(), stage, episode(S1_BEHIND), Overshooting())
+    run = run_episode(shipped(), stage, episode(S1_BEHIND), Overshooting())
     assert run.error is None and run.clipped > 0
     assert (run.score.intent_score, run.score.execution_score, run.score.complete) == (1.0, 1.0,
                                                                                       True)

@@ -82,6 +82,34 @@ def test_a_hash_that_differs_fails_only_where_the_environment_matches(made, tmp_
             f"{environment()['mujoco']} (recorded / here))") in out
 
 
+@pytest.mark.parametrize("change,message", [
+    (lambda r: r["hashes"].update(episode="0" * 16),
+     "has hash 0000000000000000 in the run but {hash} in release v1: another episode under its "
+     "id"),
+    (lambda r: r.update(episode=r["episode"].replace("#r1", "#r11")),
+     "is not in release v1, the run's benchmark"),
+])
+def test_an_episode_its_release_does_not_hold_is_named(made, tmp_path, capsys, change, message):
+    """A recorded episode that is not its release's (another hash under its id, or an id the
+    release lacks) stops reproduce before anything runs, in one line naming it."""
+    run = _copy(made, tmp_path)
+    first = json.loads((run / "episodes.jsonl").read_text().splitlines()[0])
+    _rewrite_records(run, change)
+    changed = json.loads((run / "episodes.jsonl").read_text().splitlines()[0])
+    assert main(["reproduce", str(run), "--episode", changed["episode"]]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert err[-1] == (f"error: {run}: episode {changed['episode']} "
+                       + message.format(hash=first["hashes"]["episode"])), err
+
+
+def test_a_run_with_no_episode_is_not_called_reproduced(made, tmp_path, capsys):
+    run = _copy(made, tmp_path)
+    (run / "episodes.jsonl").write_text("")
+    (run / "scores.csv.gz").unlink()
+    assert main(["reproduce", str(run)]) == 1
+    assert "records no episode: there is nothing to reproduce" in capsys.readouterr().err
+
+
 def test_a_saved_run_reproduces_from_its_score_file(made, tmp_path, capsys):
     run = _copy(made, tmp_path)
     (run / "episodes.jsonl").unlink()
@@ -103,10 +131,24 @@ def test_the_sample_spreads_over_the_cells():
 def test_a_recorded_policy_that_is_gone_asks_for_another(made, tmp_path, capsys):
     run = _copy(made, tmp_path)
     options = json.loads((run / "run.json").read_text())
-    (run / "run.json").write_text(json.dumps(dict(options, policy="runs/gone/ckpt-text")))
+    (run / "run.json").write_text(json.dumps(dict(options, policy="runs/gone/ckpt-mine")))
     assert main(["reproduce", str(run)]) == 2
     err = capsys.readouterr().err
     assert "--policy re-runs its episodes with another" in err and "Traceback" not in err
+
+
+def test_a_gone_checkpoint_folder_is_stood_in_for_by_the_shipped_one_and_judged(made, tmp_path,
+                                                                                capsys):
+    """A checkpoint folder named as a shipped baseline's (ckpt-NAME) that is not here is
+    re-run as baseline:NAME, said on stderr; the scores decide: this run was the expert's, so
+    the stand-in does not reproduce it."""
+    run = _copy(made, tmp_path)
+    options = json.loads((run / "run.json").read_text())
+    (run / "run.json").write_text(json.dumps(dict(options, policy="runs/gone/ckpt-blind")))
+    assert main(["reproduce", str(run), "--episodes", "2"]) == 1
+    captured = capsys.readouterr()
+    assert "the shipped baseline:blind stands in for it" in captured.err
+    assert "NOT reproduced" in captured.out
 
 
 def test_compare_names_what_differs_between_the_runs_environments(made, tmp_path, capsys):

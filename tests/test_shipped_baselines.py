@@ -16,7 +16,7 @@ import pytest
 from robofollow.compiler.scene.spec import LEVELS
 from robofollow.eval.running.reproduce import reproduce
 from robofollow.eval.running.saved_run import load_records
-from tests.sim_helpers import cached_benchmark
+from tests.sim_helpers import shipped
 
 pytestmark = pytest.mark.slow
 
@@ -45,7 +45,7 @@ def sampled(records: list[dict], offset: int) -> list[dict]:
 def reproduces(policy: str, run: Path, recorded: list[dict]) -> None:
     """Run the recorded episodes again: scores agree, and hashes where the environment
     matches."""
-    found = reproduce(cached_benchmark(), run, policy=policy,
+    found = reproduce(shipped(), run, policy=policy,
                       episodes=[r["episode"] for r in recorded])
     assert found.hashes_compared == SAMPLED and not found.score_differences, found.text()
     assert found.agrees, found.text()

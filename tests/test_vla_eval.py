@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 import robofollow
+from robofollow import release
 
 try:
     import vla_eval
@@ -17,14 +18,11 @@ try:
 except ImportError as missing:  # a failure, not a skip: the adapter is tested in CI
     raise ImportError("these tests need vla-eval: pip install 'robofollow[vla-eval]'") from missing
 
-from robofollow.benchmark.pipeline import compile_specs
-from robofollow.benchmark.rounds import find_episode
 from robofollow.eval.policies.reference import ExpertPolicy
 from robofollow.eval.running.chance import references
 from robofollow.eval.running.episode import run_episode
 from robofollow.eval.running.runner import result_record
 from robofollow.integrations.vla_eval import RoboFollowBenchmark, robofollow_table
-from robofollow.resources import builtin_specs
 from robofollow.sim.stage import Stage
 
 CONFIG = Path(robofollow.__file__).parent / "integrations" / "vla_eval_configs" / "robofollow.yaml"
@@ -74,8 +72,8 @@ def robofollow_record(compiled, episode, policy) -> tuple[dict, object]:
 
 @pytest.mark.slow
 def test_vla_eval_runs_robofollow_episodes_scored_as_robofollow_eval_scores_them(tmp_path):
-    compiled = compile_specs(builtin_specs())
-    first, second = (find_episode(compiled, f"{TASK}#r{i}") for i in (1, 2))
+    compiled = release.load()  # what the vla-eval benchmark reads: the current release
+    first, second = (compiled.record(f"{TASK}#r{i}") for i in (1, 2))
     expert, run = robofollow_record(compiled, first, ExpertPolicy())
     held, _ = robofollow_record(compiled, second, Hold())
     assert expert["complete"] and not held["complete"]

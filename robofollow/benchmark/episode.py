@@ -1,8 +1,9 @@
-"""What an episode is: a compiled test task's round, fully determined by (spec digest, task,
-level, layout, round, seed), with a hash over all of that. `EpisodeSetup` is the part a
-simulation and the scorer read (where the episode starts and what it asks); an `Episode` is a
-compiled test episode, as the build writes it to `episodes/*.jsonl`; a `Benchmark` is what
-running and scoring one read of the benchmark it belongs to. This module stays light: an env
+"""What an episode is: a compiled test task's round, fully determined by its world (the
+layout's bodies, where they stand, their jitter), instruction, behaviour and seed, with a hash
+over that. `EpisodeSetup` is the part a simulation and the scorer read (where the episode
+starts and what it asks); an `Episode` is a compiled test episode, as the build writes it to
+`episodes/*.jsonl`; a `Benchmark` is what running and scoring one read of the benchmark it
+belongs to. This module stays light: an env
 reads episodes without loading the compiler's passes."""
 
 from __future__ import annotations
@@ -39,8 +40,9 @@ class EpisodeSetup(Model):
 class Episode(EpisodeSetup):
     """A compiled test episode: its task, level and round, the instruction a policy is given
     and its logical form, whether an L1/L3 task's motion moved from the trained one, a hash
-    over its scene's digest and all of these (what pairs two runs' episodes), and its scene's
-    split digest (16 hex digits; which version of the split it belongs to)."""
+    over what decides it (benchmark.episode_hash; what pairs two runs' episodes; release v1's
+    records carry an earlier hash over their whole scene), and its scene's split digest (16
+    hex digits; which version of the split it belongs to)."""
 
     task: str
     level: Level

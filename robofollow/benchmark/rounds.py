@@ -4,10 +4,10 @@ seed; every episode of a build; finding one by id."""
 from __future__ import annotations
 
 import difflib
-import hashlib
 from collections.abc import Iterator
 
 from robofollow.benchmark.episode import Episode
+from robofollow.benchmark.episode_hash import episode_hash, world_digest
 from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.scene.spec import LEVELS, SplitRule
 from robofollow.compiler.splits.generator import TestTask, episode_seed
@@ -25,19 +25,19 @@ def _first(compiled: Compiled, task: TestTask) -> Episode:
 
 def _rounds(compiled: Compiled, task: TestTask, first: Episode) -> Iterator[tuple[dict, str]]:
     """Each round of the task's level's split rule: the episode's record and its JSON line,
-    as the build writes them (the hash covers the scene's digest and the rest of the record
-    but the split digest, so an episode keeps its hash while other tasks of its scene
-    change). The values the rounds share are encoded once."""
-    rule = compiled.spec.scenes[task.scene].splits.get(task.level) or SplitRule(level=task.level)
+    as the build writes them (the hash covers what decides the episode alone,
+    benchmark.episode_hash, so an episode keeps its hash while other tasks and layouts of its
+    scene change). The values the rounds share are encoded once."""
+    scene = compiled.spec.scenes[task.scene]
+    rule = scene.splits.get(task.level) or SplitRule(level=task.level)
+    world = world_digest(scene, task.layout)
     common = first.model_dump(mode="json", exclude={"hash", "split"})  # (rounds differ in 3)
     encoded = {key: json_value(value) for key, value in common.items()}
     for round_index in range(1, rule.rounds + 1):
         varying = {"episode": f"{task.id}#r{round_index}", "round": round_index,
                    "seed": episode_seed(task.id, round_index, rule.seed)}
         varying_encoded = {key: json_value(value) for key, value in varying.items()}
-        content = compiled.scene_digests[task.scene] + json_line_of({**encoded,
-                                                                     **varying_encoded})
-        varying["hash"] = hashlib.sha256(content.encode()).hexdigest()[:16]
+        varying["hash"] = episode_hash(world, {**encoded, **varying_encoded})
         varying["split"] = first.split
         record = {**common, **varying}
         yield record, json_line_of({**encoded, **varying_encoded,

@@ -13,6 +13,7 @@ from robofollow.cli.compile import add_audit, add_compile
 from robofollow.cli.data import add_dataset, add_generate
 from robofollow.cli.eval import add_compare, add_eval, add_merge, add_report
 from robofollow.cli.parse import add_parse
+from robofollow.cli.release import add_release
 from robofollow.cli.reproduce import add_reproduce
 from robofollow.cli.serve import add_serve
 from robofollow.cli.sim import add_expert, add_render, add_score
@@ -38,7 +39,7 @@ def parser() -> argparse.ArgumentParser:
                         version=f"robofollow {version('robofollow')}")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     for add in (add_parse, add_compile, add_audit, add_score, add_expert, add_render, add_eval,
-                add_report, add_compare, add_merge, add_reproduce,
+                add_report, add_compare, add_merge, add_reproduce, add_release,
                 add_serve, add_generate, add_vqa, add_train, add_dataset):
         add(commands)
     return parser

@@ -18,9 +18,27 @@ def specs_argument(parser: argparse.ArgumentParser) -> None:
                                                  "(default: " + _SPECS_DEFAULT + ")")
 
 
-def specs_option(parser: argparse.ArgumentParser) -> None:
-    """--specs, for a command with other operands."""
-    parser.add_argument("--specs", help="spec file or folder (default: " + _SPECS_DEFAULT + ")")
+def benchmark_options(parser: argparse.ArgumentParser, of_run: bool = False) -> None:
+    """--release and --specs: the benchmark a command reads (`of_run`: a command that reads a
+    run, whose own release it reads by default)."""
+    default = "the run's own" if of_run else "the current release"
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--release", metavar="NAME",
+                       help=f"the frozen benchmark release to read, e.g. v1 (default: {default})")
+    group.add_argument("--specs", metavar="PATH",
+                       help="read a working compile of these specs (a .rf file or a folder) "
+                            "instead of a release, as a task author does; recorded as such"
+                            + (" (a run made so reads its own by default)" if of_run else ""))
+
+
+def benchmark_of(args):
+    """The benchmark a command reads: --specs's working compile, else --release's release,
+    else the current release (compiled_cache.Episodes)."""
+    from robofollow import release
+
+    if args.specs is not None:
+        return release.benchmark(specs=Path(args.specs))
+    return release.benchmark(args.release)
 
 
 def specs_of(args) -> Path:

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from robofollow.cli.common import specs_argument, specs_of
-from robofollow.errors import RoboFollowError, counted
+from robofollow.errors import RoboFollowError, UsageError, counted
 
 
 def add_compile(commands) -> None:
@@ -37,6 +37,11 @@ def add_compile(commands) -> None:
     p.add_argument("--update-lock", action="store_true",
                    help="pin every scene's split digest and task counts in SPECS/splits.lock "
                         "(a clean build only)")
+    p.add_argument("--release", metavar="NAME",
+                   help="freeze the build as benchmark release NAME (e.g. v2) in the package's "
+                        "releases, for eval --release NAME: a clean build whose every scene "
+                        "is verified, now or when splits.lock pinned it; an existing release "
+                        "is never overwritten")
     p.add_argument("--workers", type=int, default=None, metavar="N",
                    help="simulation workers for verifying (default: the number of CPUs)")
     p.set_defaults(handler=cmd_compile)
@@ -54,6 +59,12 @@ def cmd_compile(args) -> int:
     from robofollow.benchmark.summary import summary
 
     check_out(Path(args.out))  # before the work: an --out that cannot take the build is refused
+    if args.release is not None:
+        from robofollow.release import check_new
+
+        if args.no_verify:
+            raise UsageError("--release freezes a verified build: leave out --no-verify")
+        check_new(args.release)
     specs = specs_of(args)
     lock = lock_path(specs)
     if args.update_lock and not (isinstance(specs, Path) and specs.is_dir()):
@@ -86,7 +97,23 @@ def cmd_compile(args) -> int:
         print(f"pinned the splits of {counted(len(compiled.spec.scenes), 'scene')} in {lock}")
     elif args.update_lock:
         print(f"{lock} left as it was: the build has findings or failed verification")
+    if args.release is not None:
+        _freeze(compiled, args.release, ok)
     return 0 if ok else 1
+
+
+def _freeze(compiled, name: str, ok: bool) -> None:
+    """Freeze a clean, verified build as release `name`; say so, or why not."""
+    from robofollow.release import CURRENT, freeze
+    from robofollow.resources import releases_dir
+
+    if not ok:
+        print(f"release {name} not frozen: the build has findings or failed verification")
+        return
+    frozen = freeze(compiled, name)
+    print(f"froze release {name} in {releases_dir() / name}: {frozen.episodes:,} episodes, "
+          f"digest {frozen.digest[:12]}; `robofollow eval --release {name}` reads it (the "
+          f"default stays {CURRENT} until CURRENT in robofollow/release.py names it)")
 
 
 def _guess_warnings(compiled) -> list:

@@ -9,14 +9,13 @@ import sys
 from pathlib import Path
 
 from robofollow.cli.common import (
+    benchmark_of,
     image_size,
     interrupted,
     positive,
-    specs_argument,
-    specs_of,
 )
 from robofollow.data.jobs import DEMO_INSTRUCTIONS, FORMATS
-from robofollow.errors import RoboFollowError
+from robofollow.errors import RoboFollowError, UsageError
 
 
 def add_generate(commands) -> None:
@@ -27,11 +26,15 @@ def add_generate(commands) -> None:
                     "the next seed tried) and write a LeRobot v2.1 / v3.0 or HDF5 dataset with "
                     "the 14-D state and action, three camera videos and the instruction. "
                     "Interrupted runs continue with --resume.",
-        epilog="examples:\n  robofollow generate specs/ --out demos/            # 50 per "
-               "task, 3,750 episodes\n  robofollow generate specs/ --out small/ "
+        epilog="examples:\n  robofollow generate --out demos/            # 50 per "
+               "task, 3,750 episodes\n  robofollow generate --out small/ "
                "--tasks scene1,pickup_left_cube --episodes-per-task 3\n  robofollow dataset "
                "check demos/", formatter_class=argparse.RawDescriptionHelpFormatter)
-    specs_argument(p)
+    p.add_argument("specs", nargs="?", help="a working compile of these specs (a .rf file or "
+                                            "a folder) instead of a release, as a task author "
+                                            "records demonstrations of new tasks")
+    p.add_argument("--release", metavar="NAME", help="the benchmark release whose training "
+                                                     "tasks to record (default: the current)")
     p.add_argument("--out", required=True, metavar="DIR", help="dataset folder (new or empty, "
                                                               "or the one to --resume)")
     p.add_argument("--episodes-per-task", type=positive, default=50, metavar="N",
@@ -54,13 +57,13 @@ def add_generate(commands) -> None:
 
 
 def cmd_generate(args) -> int:
-    from robofollow.compiled_cache import load
     from robofollow.data.generate import generate
     from robofollow.data.jobs import select_tasks
     from robofollow.data.units import Options
 
-    specs = specs_of(args)
-    compiled = load(specs)
+    if args.specs is not None and args.release is not None:
+        raise UsageError("SPECS (a working compile) or --release: give one")
+    compiled = benchmark_of(args)
     width, height = args.image_size
     tasks = select_tasks(compiled, [t for t in (args.tasks or "").split(",") if t.strip()])
     options = Options(args.format, args.episodes_per_task, tuple(tasks), width, height,

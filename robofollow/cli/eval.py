@@ -12,12 +12,12 @@ from dataclasses import replace
 from pathlib import Path
 
 from robofollow.cli.common import (
+    benchmark_of,
+    benchmark_options,
     interrupted,
     points,
     positive,
     seconds,
-    specs_of,
-    specs_option,
 )
 from robofollow.compiler.scene.spec import LEVELS, MOTION_LEVELS, ROUNDS
 from robofollow.errors import RoboFollowError, UsageError
@@ -58,7 +58,7 @@ def add_eval(commands) -> None:
                         "checkpoint folder, module:factory, ws://HOST:PORT (openpi) or "
                         "tcp://HOST:PORT (upstream); servers take ?timeout=S&retries=N")
     p.add_argument("--out", required=True, metavar="RUN", help="run folder")
-    specs_option(p)
+    benchmark_options(p)
     p.add_argument("--scenes", metavar="LIST", help="comma-separated scenes (default: all)")
     p.add_argument("--levels", metavar="LIST", help="comma-separated levels (default: all)")
     p.add_argument("--tasks", metavar="LIST", help="comma-separated task ids, e.g. "
@@ -119,7 +119,6 @@ def add_eval(commands) -> None:
 
 
 def cmd_eval(args) -> int:
-    from robofollow.compiled_cache import load
     from robofollow.compiler.authoring.spec_loader import load_spec
     from robofollow.eval.policies.loading import check_policy, with_privileged
     from robofollow.eval.policies.policy_kind import is_server
@@ -154,22 +153,25 @@ def cmd_eval(args) -> int:
         raise UsageError(f"--controls {args.instruction_mode}: the run itself gives "
                          f"{args.instruction_mode} instructions; a control arm compares "
                          "the instructed run with another mode")
-    specs = specs_of(args)
-    spec = load_spec(specs)
+    # a release reads in a blink; a working compile's specs load before they compile
+    compiled = None if args.specs is not None else benchmark_of(args)
+    spec = compiled.spec if compiled is not None else load_spec(Path(args.specs))
     scenes = _names(args.scenes, list(spec.scenes), "scene")
     levels = _names(args.levels, list(LEVELS), "level")
     policy = with_privileged(args.policy) if args.allow_privileged else args.policy
+    source = ({"specs": str(Path(args.specs).resolve())} if compiled is None else
+              {"release": compiled.release, "release_digest": compiled.release_digest})
     options = EvalOptions(policy, tuple(scenes), tuple(levels), args.rounds,
                           args.instruction_mode, args.video, spec.digest, (),
                           args.sample, args.policy_timeout if args.policy_timeout is not None
                           else None if is_server(args.policy) else DEFAULT_POLICY_TIMEOUT,
-                          args.shard, tuple(controls))
+                          args.shard, tuple(controls), **source)
     arms = [(Path(args.out), options)] + [
         (Path(args.out) / CONTROLS / mode, options.arm(mode)) for mode in controls]
     if args.tasks is None:
         for out, arm in arms:
             check_prepare(out, arm.to_json(), args.resume)
-    compiled = load(specs)
+    compiled = compiled or benchmark_of(args)
     if args.tasks is not None:
         tasks = tuple(_names(args.tasks, list(compiled.task_ids), "task"))
         arms = [(out, replace(arm, tasks=tasks)) for out, arm in arms]
@@ -288,7 +290,7 @@ def add_report(commands) -> None:
     p.add_argument("--export", choices=sorted(EXPORTS), action="append",
                    help="one run: also write Table 1 with its intervals for a paper "
                         "(RUN/table1.csv, RUN/table1.tex); may be repeated")
-    specs_option(p)
+    benchmark_options(p, of_run=True)
     p.set_defaults(handler=cmd_report)
 
 
@@ -358,17 +360,26 @@ def add_merge(commands) -> None:
                "runs/b2 --out runs/blind")
     p.add_argument("shards", nargs="+", metavar="SHARD", help="the shard run folders")
     p.add_argument("--out", required=True, metavar="RUN", help="the merged run folder (new)")
-    specs_option(p)
+    benchmark_options(p, of_run=True)
     p.set_defaults(handler=cmd_merge)
 
 
+def _run_benchmark(run: Path, args):
+    """The benchmark of a run: its own release (or working compile), or --specs's."""
+    from robofollow.eval.running.run_benchmark import run_benchmark
+    from robofollow.eval.running.saved_run import load_options
+
+    return run_benchmark(run, load_options(run), args.release,
+                         Path(args.specs) if args.specs is not None else None)
+
+
 def cmd_merge(args) -> int:
-    from robofollow.compiled_cache import load
     from robofollow.eval.reports.report import write_report
     from robofollow.eval.reports.tables import table_text
     from robofollow.eval.running.merge import merge
 
-    result, folders = merge(load(specs_of(args)), [Path(s) for s in args.shards], Path(args.out))
+    shards = [Path(s) for s in args.shards]
+    result, folders = merge(_run_benchmark(shards[0], args), shards, Path(args.out))
     for folder in folders:
         write_report(folder)
     print(f"merged {len(args.shards)} shards into {args.out} ({result['episodes']} episodes):")
@@ -459,27 +470,20 @@ def _plan(runs: list[Path], args) -> int:
 
 def _motions(run: Path, args) -> dict[str, str | None]:
     """The motion of each L1 / L3 episode of a run whose records do not carry it (written
-    before they did), from the compiled episodes of the specs when they are the run's; else
-    none (their motion is unknown)."""
-    from robofollow.compiled_cache import load
-    from robofollow.compiler.authoring.spec_loader import load_spec
+    before they did), from the episodes of the run's benchmark where it is here; else none
+    (their motion is unknown)."""
     from robofollow.eval.running.saved_run import load_run
 
     options, results = load_run(run)
     missing = [r["episode"] for r in results if "motion" not in r and r["level"] in MOTION_LEVELS]
     if not missing:
         return {}
-    specs = specs_of(args)
     try:
-        digest = load_spec(specs).digest  # (loading them is quick; compiling is not)
+        episodes = _run_benchmark(run, args)
     except RoboFollowError as error:
-        digest, why = None, f"the specs {specs} do not load ({error.render().splitlines()[0]})"
-    else:
-        why = f"the specs {specs} are not the run's (--specs chooses others)"
-    if digest != options.spec_digest:
         print(f"{run}: {len(missing)} L1/L3 records do not say whether their task's motion "
-              f"moved, and {why}: shown as unknown", file=sys.stderr)
+              f"moved, and its benchmark is not here ({error.render().splitlines()[0]}): "
+              "shown as unknown", file=sys.stderr)
         return {}
-    episodes = load(specs)
     return {episode: episodes.record(episode).motion for episode in missing
             if episode in episodes.index}

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import argparse
+import sys
 from pathlib import Path
 
-from robofollow.cli.common import positive, specs_of, specs_option
+from robofollow.cli.common import benchmark_options, positive
 
 
 def add_reproduce(commands) -> None:
@@ -16,10 +18,14 @@ def add_reproduce(commands) -> None:
                     "trajectory hashes must agree bit for bit where the run's recorded "
                     "environment (Python, NumPy, MuJoCo, JAX, CPU: RUN/run.json's provenance) "
                     "matches this one, and otherwise the versions that differ are named. "
-                    "Nothing is written. Exit status 0: reproduced; 1: a score (or, in a "
+                    "The episodes come from the run's own release (RUN/run.json names it; a "
+                    "run made before runs named theirs reads the release of its specs), so "
+                    "a run reproduces whatever the specs are now. Nothing is written. Exit status 0: reproduced; 1: a score (or, in a "
                     "matching environment, a hash) differs.",
         epilog="examples:\n  robofollow reproduce docs/results/expert\n  robofollow "
-               "reproduce docs/results/baselines/text --policy baseline:text --episodes 16")
+               "reproduce docs/results/baselines/text --episodes 16\n  robofollow "
+               "reproduce runs/mine --policy runs/ckpt-mine",
+        formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("run", metavar="RUN", help="a run folder (episodes.jsonl or scores.csv.gz)")
     p.add_argument("--episodes", type=positive, metavar="N",
                    help="how many recorded episodes to re-run (default: 8)")
@@ -27,34 +33,42 @@ def add_reproduce(commands) -> None:
                    help="re-run this recorded episode (e.g. scene2/L0/pickup_left_cube#r1); "
                         "may be repeated; instead of --episodes")
     p.add_argument("--policy", help="run them with this policy instead of the recorded one "
-                                    "(e.g. baseline:NAME for a run made from the checkpoint "
-                                    "folder it ships as)")
+                                    "(default: the recorded one; a checkpoint folder that is "
+                                    "not here is stood in for by the run's shipped "
+                                    "checkpoint, RUN/checkpoint or baseline:NAME)")
     p.add_argument("--workers", type=positive, default=1, metavar="N",
                    help="workers, one simulation each (default: 1)")
-    specs_option(p)
+    benchmark_options(p, of_run=True)
     p.set_defaults(handler=cmd_reproduce)
 
 
 def cmd_reproduce(args) -> int:
-    from robofollow.compiled_cache import load
     from robofollow.errors import RoboFollowError, UsageError
     from robofollow.eval.policies.loading import check_policy
-    from robofollow.eval.running.reproduce import DEFAULT_EPISODES, reproduce
+    from robofollow.eval.running.reproduce import DEFAULT_EPISODES, reproduce, stand_in
+    from robofollow.eval.running.run_benchmark import described, run_benchmark
     from robofollow.eval.running.saved_run import load_options
 
     if args.episode and args.episodes:
         raise UsageError("--episode names the episodes; --episodes picks that many: give one")
     run = Path(args.run)
-    if args.policy:
-        check_policy(args.policy)
-    else:
-        recorded = load_options(run).policy
-        try:
-            check_policy(recorded)
-        except RoboFollowError as error:
-            raise UsageError(f"{error.render()}: the run was made with that policy; --policy "
-                             "re-runs its episodes with another (e.g. baseline:NAME)") from None
-    found = reproduce(load(specs_of(args)), run, args.episodes or DEFAULT_EPISODES,
-                      args.policy, args.workers, args.episode)
+    options = load_options(run)
+    policy = args.policy
+    if policy is None and (policy := stand_in(run, options.policy)) is not None:
+        print(f"policy: {options.policy} is not here; the shipped {policy} stands in for it "
+              "(--policy chooses another)", file=sys.stderr)
+    try:
+        check_policy(policy or options.policy)
+    except RoboFollowError as error:
+        if policy:
+            raise
+        raise UsageError(f"the run was made with --policy {options.policy!r}, which is not "
+                         f"here ({error.render()}); --policy re-runs its episodes with "
+                         "another (e.g. baseline:NAME)") from None
+    benchmark = run_benchmark(run, options, args.release,
+                              Path(args.specs) if args.specs is not None else None)
+    print(f"benchmark: {described(options)}", file=sys.stderr)
+    found = reproduce(benchmark, run, args.episodes or DEFAULT_EPISODES, policy, args.workers,
+                      args.episode)
     print(found.text())
     return 0 if found.agrees else 1

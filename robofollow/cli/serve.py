@@ -6,7 +6,7 @@ import argparse
 import ipaddress
 import sys
 
-from robofollow.cli.common import positive, seconds, specs_of, specs_option
+from robofollow.cli.common import benchmark_of, benchmark_options, positive, seconds
 from robofollow.errors import RoboFollowError, UsageError
 from robofollow.eval.protocols.limits import (
     DEFAULT_HOST,
@@ -53,7 +53,7 @@ def add_serve(commands) -> None:
     p.add_argument("--max-clients", type=positive, metavar="N",
                    help="connections served at once, each with its own instance of the "
                         f"policy; more are refused (default: {MAX_CLIENTS})")
-    specs_option(p)
+    benchmark_options(p)
     p.set_defaults(handler=cmd_serve)
 
 
@@ -102,7 +102,6 @@ def cmd_serve(args) -> int:
     check_host(args.host, args.allow_remote)  # before anything is loaded
     import logging
 
-    from robofollow.compiled_cache import load
     from robofollow.eval.serving.serving import ServerLimits
     from robofollow.eval.serving.tcp_server import TcpPolicyServer
     from robofollow.eval.serving.websocket_server import PolicyServer
@@ -111,7 +110,7 @@ def cmd_serve(args) -> int:
                             else (PolicyServer, "ws"))
     limits = ServerLimits(args.max_message, args.idle_timeout, args.max_clients)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s: %(message)s")
-    server = server_class(load(specs_of(args)), args.policy, limits)
+    server = server_class(benchmark_of(args), args.policy, limits)
 
     def listening(listener) -> None:  # only now can a client connect
         host, port = listener.getsockname()[:2]  # as bound: the port 0 chose, '' as 0.0.0.0

@@ -5,7 +5,12 @@ from __future__ import annotations
 import argparse
 import json
 
-from robofollow.cli.common import image_size, scene_layout, specs_of, specs_option
+from robofollow.cli.common import (
+    benchmark_of,
+    benchmark_options,
+    image_size,
+    scene_layout,
+)
 from robofollow.errors import RoboFollowError
 
 
@@ -23,13 +28,12 @@ def add_score(commands) -> None:
     p.add_argument("trajectory", metavar="TRAJECTORY_FILE", help="a saved trajectory (.npz)")
     p.add_argument("--episode", metavar="ID",
                    help="episode id to score against (default: the one the file records)")
-    specs_option(p)
+    benchmark_options(p)
     p.add_argument("--json", action="store_true", help="print the EpisodeScore as JSON")
     p.set_defaults(handler=cmd_score)
 
 
 def cmd_score(args) -> int:
-    from robofollow.compiled_cache import load
     from robofollow.scoring import score_recording
     from robofollow.trajectory import Trajectory
 
@@ -38,7 +42,7 @@ def cmd_score(args) -> int:
     if not episode_id:
         raise RoboFollowError(f"{args.trajectory} does not say which episode it records; "
                               "pass --episode ID")
-    benchmark = load(specs_of(args))
+    benchmark = benchmark_of(args)
     record = benchmark.record(episode_id)
     result = score_recording(benchmark, record, trajectory)
     if args.json:
@@ -61,7 +65,7 @@ def add_expert(commands) -> None:
     p.add_argument("--episode", required=True, metavar="ID",
                    help="episode id, <scene>/<level>/<task>#r<round> (see episodes/*.jsonl "
                         "of `robofollow compile`)")
-    specs_option(p)
+    benchmark_options(p)
     p.add_argument("--video", metavar="OUT.mp4",
                    help="write the three cameras side by side as an mp4")
     p.add_argument("--trajectory", metavar="OUT.npz", help="save the recorded trajectory")
@@ -74,12 +78,11 @@ def add_expert(commands) -> None:
 
 
 def cmd_expert(args) -> int:
-    from robofollow.compiled_cache import load
     from robofollow.sim.cameras import side_by_side
     from robofollow.sim.rollout import run_expert
     from robofollow.sim.simulation import CONTROL_HZ
 
-    benchmark = load(specs_of(args))
+    benchmark = benchmark_of(args)
     episode = benchmark.record(args.episode)
     width, height = args.image_size
     frames: list = []
@@ -119,17 +122,16 @@ def add_render(commands) -> None:
     p.add_argument("-o", "--output", required=True, metavar="OUT.png", help="image file")
     p.add_argument("--seed", type=int, help="apply this episode seed's jitter "
                                             "(default: nominal positions)")
-    specs_option(p)
+    benchmark_options(p)
     p.add_argument("--image-size", type=image_size, default=(640, 480), metavar="WxH",
                    help="size of each of the two views (default: 640x480)")
     p.set_defaults(handler=cmd_render)
 
 
 def cmd_render(args) -> int:
-    from robofollow.compiled_cache import load
     from robofollow.sim.picture import layout_picture
 
-    benchmark = load(specs_of(args))
+    benchmark = benchmark_of(args)
     layout = scene_layout(benchmark, args.scene, args.layout)
     width, height = args.image_size
     layout_picture(benchmark.spec.scenes[args.scene], layout, args.seed, width,

@@ -6,7 +6,12 @@ import argparse
 import json
 from pathlib import Path
 
-from robofollow.cli.common import positive, scene_layout, specs_of, specs_option
+from robofollow.cli.common import (
+    benchmark_of,
+    benchmark_options,
+    positive,
+    scene_layout,
+)
 from robofollow.errors import RoboFollowError
 
 
@@ -22,7 +27,7 @@ def add_vqa(commands) -> None:
         epilog="examples:\n  robofollow vqa --scene scene2 --out vqa/scene2 --count 50\n  "
                "robofollow vqa --qa20 --out vqa/qa20\n  robofollow vqa score answers.jsonl",
         formatter_class=argparse.RawDescriptionHelpFormatter)
-    specs_option(p)
+    benchmark_options(p)
     p.add_argument("--scene", default="scene2", help="scene id (default: scene2)")
     p.add_argument("--layout", help="layout name (default: the scene's first layout)")
     p.add_argument("--out", metavar="DIR", help="new folder for images and questions")
@@ -51,7 +56,6 @@ def add_vqa(commands) -> None:
 
 
 def cmd_vqa(args) -> int:
-    from robofollow.compiled_cache import load
     from robofollow.vqa.paper import LAYOUT, SCENE
     from robofollow.vqa.probe import write_probe
 
@@ -61,7 +65,7 @@ def cmd_vqa(args) -> int:
     out = Path(args.out)
     if out.is_dir() and any(out.iterdir()):
         raise RoboFollowError(f"{out} is not empty; choose a new folder")
-    compiled = load(specs_of(args))
+    compiled = benchmark_of(args)
     scene, layout = (SCENE, LAYOUT) if args.qa20 else (args.scene,
                                                        scene_layout(compiled, args.scene, args.layout))
     records = write_probe(compiled, scene, layout, out, args.count, args.seed, args.qa20,

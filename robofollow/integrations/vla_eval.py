@@ -47,7 +47,8 @@ def _names(value: str | Iterable[str] | None) -> list[str] | None:
 
 
 class RoboFollowBenchmark(StepBenchmark):
-    """RoboFollow's compiled test episodes (built-in specs unless `specs` is given), selected
+    """RoboFollow's test episodes (the current release, or `release`; a working compile of
+    `specs` where given), selected
     as `robofollow eval --scenes --levels --sample` does; `instruction_mode` is normal, empty
     or shuffled; `budget` is the action budget in control steps (default 500); `width` and
     `height` the camera images' size."""
@@ -61,14 +62,13 @@ class RoboFollowBenchmark(StepBenchmark):
     def __init__(self, specs: str | None = None, scenes: str | list[str] | None = None,
                  levels: str | list[str] | None = None, sample: int | None = None,
                  instruction_mode: str = "normal", budget: int | None = None,
-                 width: int = 320, height: int = 240) -> None:
+                 width: int = 320, height: int = 240, release: str | None = None) -> None:
         super().__init__()
         # Imported here, after configure_render: MuJoCo binds its GL backend when imported.
-        from robofollow.compiled_cache import load
+        from robofollow import release as releases
         from robofollow.compiler.scene.spec import LEVELS
         from robofollow.eval.running.modes import INSTRUCTION_MODES
         from robofollow.eval.running.runner import EvalOptions, select_episodes
-        from robofollow.resources import builtin_specs
         from robofollow.sim import MAX_STEPS
         from robofollow.sim.stage import Stage
 
@@ -79,7 +79,7 @@ class RoboFollowBenchmark(StepBenchmark):
         if self.budget < 1:
             raise ValueError(f"budget must be at least 1 control step, got {budget}")
         self.instruction_mode = instruction_mode
-        compiled = self.compiled = load(Path(specs) if specs else builtin_specs())
+        compiled = self.compiled = releases.benchmark(release, Path(specs) if specs else None)
         self.stage = Stage(width, height)  # the current layout's simulation and cameras
         scenes, levels = _names(scenes), _names(levels)
         for kind, given, known in (("scene", scenes, list(compiled.spec.scenes)),
@@ -89,7 +89,8 @@ class RoboFollowBenchmark(StepBenchmark):
                 raise ValueError(f"unknown {kind}s {unknown} (known: {', '.join(known)})")
         options = EvalOptions("vla-eval", tuple(scenes or compiled.spec.scenes),
                               tuple(levels or LEVELS), _ALL_ROUNDS, instruction_mode, "none",
-                              compiled.spec.digest, sample=sample)
+                              compiled.spec.digest, sample=sample, release=compiled.release,
+                              release_digest=compiled.release_digest)
         self._rounds: dict[str, list[Episode]] = {}
         for episode in select_episodes(compiled, options):
             self._rounds.setdefault(episode.task, []).append(episode)

@@ -1,6 +1,6 @@
 """A Gymnasium 1.x environment over the compiled benchmark's episodes.
 
-    env = RoboFollowEnv()                       # the built-in specs, every episode
+    env = RoboFollowEnv()                       # the current release, every episode
     obs, info = env.reset(options={"episode": "scene2/L0/pickup_left_cube#r1"})
     env = gymnasium.make("RoboFollow-Scene2-v0", level="L1")   # see robofollow.sim.registration
     obs, reward, terminated, truncated, info = env.step(action)   # 14-D joint targets
@@ -11,8 +11,9 @@ with `objects=True` "objects": the objects observation (sim/objects.py: every bo
 colour, position and yaw, ground truth, in an order that carries no identity).
 `reset()` plays the env's `episode`, else one drawn (with the env's seeded generator) from
 the episodes of `scene` and `level` (None: all). The episode fixes layout, instruction and
-jitter seed; `reset(seed=...)` overrides the seed. The compiled benchmark comes from the on-disk
-cache (robofollow.compiled_cache), so an env starts without compiling the specs.
+jitter seed; `reset(seed=...)` overrides the seed. The episodes come from a frozen release
+(robofollow.release: the current one, or `release="v1"`), or with `specs=` from a working
+compile of those specs (the on-disk compile cache).
 Reward is always 0 and nothing terminates early: the oracle scores the recorded trajectory
 (`env.trajectory()`), as the benchmark's protocol runs a fixed action budget. Targets past a
 joint limit are clipped to it; `info["clipped"]` counts the actions that had one.
@@ -27,9 +28,8 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from robofollow import compiled_cache
+from robofollow import release as releases
 from robofollow.benchmark.episode import Episode
-from robofollow.resources import builtin_specs
 from robofollow.sim import MAX_STEPS, robot
 from robofollow.sim.cameras import CAMERA_NAMES, Cameras
 from robofollow.sim.objects import SHAPE as OBJECTS_SHAPE
@@ -48,8 +48,8 @@ class RoboFollowEnv(gym.Env):
     def __init__(self, episode: str | Episode | None = None, specs: str | Path | None = None,
                  width: int = 320, height: int = 240, max_steps: int = MAX_STEPS,
                  render_mode: str | None = "rgb_array", scene: str | None = None,
-                 level: str | None = None, objects: bool = False):
-        self.benchmark = compiled_cache.load(Path(specs) if specs else builtin_specs())
+                 level: str | None = None, objects: bool = False, release: str | None = None):
+        self.benchmark = releases.benchmark(release, Path(specs) if specs else None)
         self.choices = self.benchmark.select(scene, level)  # what reset() draws from
         self.default_episode = self._episode(episode) if episode else None
         self.width, self.height, self.max_steps = width, height, max_steps

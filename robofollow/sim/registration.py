@@ -1,11 +1,11 @@
 """The Gymnasium ids, registered on `import robofollow`; nothing is compiled or simulated (and
 MuJoCo is not imported) until `gymnasium.make`.
 
-    RoboFollow-v0                    the built-in benchmark's episodes
+    RoboFollow-v0                    the current release's episodes
     RoboFollow-Scene1-v0, ...        one scene's episodes (one id per built-in scene)
 
-`gymnasium.make`'s keyword arguments go to RoboFollowEnv (episode, level, scene, specs, width,
-height, max_steps, render_mode). Episodes are truncated after MAX_STEPS control steps, the
+`gymnasium.make`'s keyword arguments go to RoboFollowEnv (episode, level, scene, release,
+specs, width, height, max_steps, render_mode). Episodes are truncated after MAX_STEPS control steps, the
 benchmark's action budget; for another budget give both max_steps=N and max_episode_steps=N.
 """
 

@@ -3,7 +3,9 @@ and checked by their episode hash (the compiled episode: task, layout, seed) and
 records carry it, the hash of their realised start (runner.start_hash, within its tolerance);
 each difference in IS / ES / CR comes with a task-clustered 95% interval and a sign-flip
 p-value over tasks, adjusted by Holm's method over every row compared, per metric
-(statistics/paired.py; docs/statistics.md).
+(statistics/paired.py; docs/statistics.md). Runs made on different test sets (two releases, or
+a release and a working compile) pair only on the episodes whose hash over what decides them
+is the same in both (benchmark.episode_hash), and the comparison says how many.
 
 Rows: each scene x level cell, each level over the scenes (each scene's cell counting
 equally, as Table 1's averages do) and the average over every cell.
@@ -13,31 +15,41 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from robofollow import release
 from robofollow.compiler.scene.spec import LEVELS
 from robofollow.errors import RoboFollowError
 from robofollow.eval.reports.pages import p_value, signed, signed_interval
-from robofollow.eval.running.run_folder import CONTROLS, control_arms
+from robofollow.eval.running.run_benchmark import described, run_benchmark, run_release
+from robofollow.eval.running.run_folder import CONTROLS, RUN_FILE, control_arms
 from robofollow.eval.running.saved_run import (
     RunReadError,
+    load_options,
     load_provenance,
     load_records,
 )
 from robofollow.eval.statistics.paired import ALPHA, pair, paired_rows
 from robofollow.provenance import differences
 
+NOT_IN_RELEASE = "not in its release"  # the pairing hash of an episode its release lacks
+
 
 class CompareError(RoboFollowError):
     """Runs that cannot be compared."""
 
 
-def run_scores(run: Path) -> list[dict]:
+def run_scores(run: Path, hashes: dict[str, str] | None = None) -> list[dict]:
     """A run's episodes as {episode, scene, level, task, hash, start, intent, execution,
     complete}: from its full records (RUN/episodes.jsonl) or, where a run keeps only those,
-    its score file (RUN/scores.csv.gz)."""
+    its score file (RUN/scores.csv.gz). `hashes`: each episode's hash to pair by instead of
+    the recorded one (`test_set_hashes`)."""
     try:
         records = load_records(run)
     except RunReadError as error:
         raise CompareError(str(error)) from None
+    if hashes is not None:
+        records = [dict(r, hashes={**r.get("hashes", {}),
+                                   "episode": hashes.get(r["episode"], NOT_IN_RELEASE)})
+                   for r in records]
     return [{"episode": r["episode"], "scene": r["scene"], "level": r["level"],
              "task": r["task"], "hash": r.get("hashes", {}).get("episode", ""),
              "start": r.get("hashes", {}).get("start", ""),
@@ -45,23 +57,63 @@ def run_scores(run: Path) -> list[dict]:
              "complete": bool(r["complete"])} for r in records]
 
 
+def _test_set(run: Path) -> tuple[str, str] | None:
+    """What a run's episodes come from: ("release", name), or ("specs", spec digest) for a
+    working compile or specs no release was frozen from; None for a folder of scores alone."""
+    if not (run / RUN_FILE).is_file():
+        return None
+    options = load_options(run)
+    name = run_release(options)
+    return ("release", name) if name else ("specs", options.spec_digest)
+
+
+def test_set_hashes(runs: list[Path]) -> list[dict[str, str]] | None:
+    """What the runs' episodes pair by: None where the runs share a test set (their recorded
+    episode hashes); else, for each run, every episode's hash over what decides it, from its
+    own release or working compile (release.content_hashes), so that only the episodes that
+    are the same in both pair."""
+    sets = [_test_set(run) for run in runs]
+    if None in sets or len(set(sets)) == 1:
+        return None
+    hashes = []
+    for run in runs:
+        try:
+            benchmark = run_benchmark(run, load_options(run))
+        except RoboFollowError as error:
+            raise CompareError(f"{run} was made on another test set than {runs[0]}, and its "
+                               f"own is not here to pair them: {error.render()}") from None
+        hashes.append(release.content_hashes(benchmark))
+    return hashes
+
+
 def compare_runs(a: Path, b: Path, names: tuple[str, str] | None = None) -> dict:
     """The paired comparison of run B with run A: {"a", "b", "pairing", "warnings", "rows",
-    "verdicts"}; differences are A - B in points. `names`: what the verdicts call the runs
-    (default: their folders' names)."""
+    "verdicts"}, and "test_sets" where the runs were made on different ones (only the episodes
+    that are the same in both pair); differences are A - B in points. `names`: what the
+    verdicts call the runs (default: their folders' names)."""
     first, second = names or (a.name, b.name)
-    pairing = pair(run_scores(a), run_scores(b))
+    hashes = test_set_hashes([a, b])
+    pairing = pair(*(run_scores(run, hashes and hashes[i]) for i, run in enumerate((a, b))))
     if not pairing.pairs:
         raise CompareError(f"{a} and {b} share no episode: nothing to compare (were they run "
                            "on the same specs?)")
     rows = paired_rows(pairing)
-    return {"a": str(a), "b": str(b),
-            "pairing": {"pairs": len(pairing.pairs), "only_a": len(pairing.only_a),
-                        "only_b": len(pairing.only_b),
-                        "other_episode": len(pairing.other_episode),
-                        "other_start": len(pairing.other_start)},
-            "warnings": pairing.warnings(first, second), "rows": rows,
-            "verdicts": [verdict(row, first, second) for row in _headline(rows)]}
+    warnings = pairing.warnings(first, second)
+    found = {"a": str(a), "b": str(b),
+             "pairing": {"pairs": len(pairing.pairs), "only_a": len(pairing.only_a),
+                         "only_b": len(pairing.only_b),
+                         "other_episode": len(pairing.other_episode),
+                         "other_start": len(pairing.other_start)},
+             "warnings": warnings, "rows": rows,
+             "verdicts": [verdict(row, first, second) for row in _headline(rows)]}
+    if hashes is not None:
+        sets = [described(load_options(run)) for run in (a, b)]
+        warnings.insert(0, f"{first} and {second} were made on different test sets ({first}: "
+                           f"{sets[0]}; {second}: {sets[1]}): paired on the "
+                           f"{len(pairing.pairs)} episodes that are the same in both, "
+                           f"{len(pairing.other_episode)} of the ids both hold left out")
+        found["test_sets"] = sets
+    return found
 
 
 def _headline(rows: list[dict]) -> list[dict]:

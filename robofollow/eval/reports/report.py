@@ -25,6 +25,7 @@ from robofollow.eval.reports.comparison import (
     CompareError,
     compare_runs,
     control_comparisons,
+    test_set_hashes,
 )
 from robofollow.eval.reports.comparison_page import markdown
 from robofollow.eval.reports.figures import (
@@ -102,6 +103,13 @@ def compare_reports(runs: list[Path], motions: list[dict[str, str | None]] | Non
     motions = motions or [{} for _ in runs]
     held = [{r["episode"] for r in results} for _, results in loaded]
     common = set.intersection(*held)
+    hashes, notes = test_set_hashes(runs), []
+    if hashes is not None:  # runs of other test sets: only the episodes the same in all
+        same = {e for e in common if len({h.get(e) for h in hashes}) == 1 and e in hashes[0]}
+        notes.append(f"the runs were made on different test sets: compared on the "
+                     f"{len(same)} of the {len(common)} episodes they all hold that are the "
+                     "same in every one")
+        common = same
     if not common:
         raise ReportError("the runs share no episode: "
                           + ", ".join(f"{run} holds {len(h)}" for run, h in zip(runs, held,
@@ -111,6 +119,7 @@ def compare_reports(runs: list[Path], motions: list[dict[str, str | None]] | Non
                 if h - common]
     if warnings:
         warnings.append(f"compared on the {len(common)} episodes every run holds")
+    warnings = notes + warnings
     tables = [table(with_motion([r for r in results if r["episode"] in common], found))
               for (_, results), found in zip(loaded, motions, strict=True)]
     found = Comparison([run.name for run in runs], [o for o, _ in loaded], tables, warnings)

@@ -25,6 +25,7 @@ from robofollow.eval.running.outcomes import (
     kind,
     kinds,
 )
+from robofollow.eval.running.run_benchmark import described as benchmark_described
 from robofollow.eval.running.runner import EvalOptions, summary
 from robofollow.eval.statistics.drops import level_drops, origin
 from robofollow.eval.statistics.metrics import (
@@ -284,6 +285,7 @@ def report_data(name: str, options: EvalOptions, results: list[dict],
                           ).most_common(TOP),
         "clipping": clipping(results),
         "videos": _videos(results, names),
+        "benchmark": benchmark_described(options),
         "made_with": [described(entry) for entry in provenance or ()]}
     data["findings"] = findings(data)
     return data

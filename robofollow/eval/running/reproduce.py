@@ -13,9 +13,11 @@ from pathlib import Path
 
 from robofollow.compiled_cache import Episodes
 from robofollow.errors import RoboFollowError
-from robofollow.eval.policies.policy_kind import is_trained
+from robofollow.eval.policies.policy_kind import is_trained, policy_kind
 from robofollow.eval.running.runner import episode_records
 from robofollow.eval.running.saved_run import load_records, read_run_file
+from robofollow.learn.checkpoint import PREFIX, is_checkpoint
+from robofollow.learn.policy import shipped_names
 from robofollow.provenance import ARITHMETIC, differences, environment
 
 DEFAULT_EPISODES = 8  # re-run by default: one per cell of two levels of four scenes
@@ -91,17 +93,52 @@ def _scores(record: dict) -> tuple[str, str, bool]:
             bool(record["complete"]))
 
 
+def stand_in(run: Path, policy: str) -> str | None:
+    """A shipped checkpoint for a run's checkpoint folder that is not here: the run's own
+    (RUN/checkpoint, as a second seed ships), else the shipped baseline of the folder's name
+    (`ckpt-NAME` or NAME: baseline:NAME); None when the policy is not such a folder or none
+    ships. The re-run's scores say whether it is the one that made the run."""
+    if policy_kind(policy) != "factory" or ":" in policy:  # (a folder that is not here)
+        return None
+    if is_checkpoint(run / "checkpoint"):
+        return str(run / "checkpoint")
+    name = Path(policy).name.removeprefix("ckpt-")
+    return f"{PREFIX}{name}" if name in shipped_names() else None
+
+
+def _check_episodes(run: Path, records: list[dict], benchmark: Episodes) -> None:
+    """ReproduceError naming the first record whose episode the run's benchmark lacks, or
+    whose recorded episode hash is not the benchmark's."""
+    for record in records:
+        episode = record["episode"]
+        if episode not in benchmark.index:
+            raise ReproduceError(f"{run}: episode {episode} is not in {_source(benchmark)}, "
+                                 "the run's benchmark")
+        recorded = record.get("hashes", {}).get("episode")
+        if recorded and recorded != benchmark.record(episode).hash:
+            raise ReproduceError(f"{run}: episode {episode} has hash {recorded} in the run "
+                                 f"but {benchmark.record(episode).hash} in "
+                                 f"{_source(benchmark)}: another episode under its id")
+
+
+def _source(benchmark: Episodes) -> str:
+    return f"release {benchmark.release}" if benchmark.release else "the working compile"
+
+
 def reproduce(compiled: Episodes, run: Path, count: int = DEFAULT_EPISODES,
               policy: str | None = None, workers: int = 1,
               episodes: list[str] | None = None) -> Reproduction:
     """Run `count` of the run's recorded episodes again (or the named `episodes`) with its
     policy (or `policy`, e.g. a shipped baseline's name for a run made from its checkpoint
-    folder) and compare them with the records."""
+    folder) and compare them with the records. `compiled`: the run's benchmark
+    (run_benchmark)."""
     options, made = read_run_file(run)
     if options.spec_digest != compiled.spec.digest:
         raise ReproduceError(f"{run} was run on other specs than these (--specs chooses the "
                              "run's)")
     recorded = load_records(run)
+    if not recorded:
+        raise ReproduceError(f"{run} records no episode: there is nothing to reproduce")
     if episodes is not None:
         by_id = {r["episode"]: r for r in recorded}
         unknown = [e for e in episodes if e not in by_id]
@@ -110,6 +147,7 @@ def reproduce(compiled: Episodes, run: Path, count: int = DEFAULT_EPISODES,
         chosen = [by_id[e] for e in episodes]
     else:
         chosen = sampled(recorded, count)
+    _check_episodes(run, chosen, compiled)
     options = replace(options, video="none", policy=policy or options.policy)
     here = environment(is_trained(options.policy))
     found = Reproduction(str(run), options.policy, [r["episode"] for r in chosen])

@@ -13,6 +13,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager, suppress
 from pathlib import Path
 
+from robofollow import release
 from robofollow.errors import RoboFollowError, UsageError
 from robofollow.files import (
     changed_options,
@@ -279,9 +280,21 @@ def check_prepare(out: Path, options: dict, resume: bool) -> None:
         raise EvalRunError(f"{out} holds a finished run that keeps only its scores "
                            f"({SCORES}, no {RESULTS}); it cannot be resumed or written over: "
                            "choose another folder")
-    problem = changed_options(previous if isinstance(previous, dict) else {}, options)
+    problem = changed_options(_named_release(previous) if isinstance(previous, dict) else {},
+                              _named_release(options))
     if problem:
         raise EvalRunError(f"{out} {problem}")
+
+
+def _named_release(recorded: dict) -> dict:
+    """A run's options as a run of today records them: one made before runs named their
+    release gets the release its specs were frozen as (so that it resumes on it)."""
+    if "release" in recorded or "specs" in recorded:
+        return recorded
+    name = release.of_spec_digest(str(recorded.get("spec_digest")))
+    if name is None:
+        return recorded
+    return dict(recorded, release=name, release_digest=release.manifest(name).digest)
 
 
 def prepare(out: Path, options: dict, resume: bool, environment: dict) -> None:

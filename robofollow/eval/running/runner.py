@@ -91,11 +91,15 @@ class EvalOptions:
     policy_timeout: float | None = None  # seconds an in-process policy call may take
     shard: str | None = None  # "I/N": the I-th of N round-robin parts of the episodes
     controls: tuple[str, ...] = ()  # the control arms run after it (RUN/controls/<mode>)
+    release: str | None = None  # the release its episodes come from, and its digest (None: a
+    release_digest: str | None = None  # working compile, or a run made before releases)
+    specs: str | None = None  # a working compile's specs (--specs), instead of a release
 
     def to_json(self) -> dict:
         data = dict(asdict(self), scenes=list(self.scenes), levels=list(self.levels),
                     tasks=list(self.tasks), controls=list(self.controls))
-        for key, unset in (("shard", None), ("controls", [])):
+        for key, unset in (("shard", None), ("controls", []), ("release", None),
+                           ("release_digest", None), ("specs", None)):
             if data[key] == unset:
                 del data[key]  # (runs made before the option have no such key)
         return data
@@ -362,8 +366,8 @@ def evaluate(compiled: Episodes, out: Path, options: EvalOptions, workers: int =
     `isolate`: run the policy in worker processes even with one worker (default: for
     policies that are not RoboFollow's own); `up_to_round`: run only the rounds up to this
     one for now (a sequential comparison adds rounds one at a time)."""
-    if options.spec_digest != compiled.spec.digest:
-        raise EvalRunError("the options' spec digest is not the compiled specs' digest")
+    if (options.spec_digest, options.release) != (compiled.spec.digest, compiled.release):
+        raise EvalRunError("the options' spec digest or release is not the benchmark's")
     check_out(out)
     with run_lock(out):
         prepare(out, options.to_json(), resume, environment(is_trained(options.policy)))

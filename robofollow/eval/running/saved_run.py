@@ -16,6 +16,7 @@ from pathlib import Path
 
 from pydantic import TypeAdapter, ValidationError
 
+from robofollow import release
 from robofollow.compiler.scene.spec import LEVELS
 from robofollow.errors import RoboFollowError, did_you_mean
 from robofollow.eval.running.modes import INSTRUCTION_MODES, VIDEO_MODES
@@ -117,6 +118,9 @@ def _options_problem(options: EvalOptions) -> str | None:
             return f"{field} is {shown(value)}, not one of {', '.join(known)}"
     if not _DIGEST.fullmatch(options.spec_digest):
         return f"spec_digest is {shown(options.spec_digest)}, not a sha256 digest (64 hex digits)"
+    problem = _release_problem(options)
+    if problem:
+        return problem
     for field in ("rounds", "sample"):
         value = getattr(options, field)
         if value is not None and value < 1:
@@ -124,6 +128,27 @@ def _options_problem(options: EvalOptions) -> str | None:
     timeout = options.policy_timeout
     if timeout is not None and not (math.isfinite(timeout) and timeout > 0):
         return f"policy_timeout is {timeout}, not a number of seconds above 0"
+    return None
+
+
+def _release_problem(options: EvalOptions) -> str | None:
+    """What is wrong with the release a run names (`field` first): one this RoboFollow does not
+    ship, a digest that is not its, a digest without a release, or a release beside specs."""
+    if options.release is None:
+        if options.release_digest is not None:
+            return "release_digest is given, but no release"
+        return None
+    if options.specs is not None:
+        return "release and specs are both given: a run reads a release or a working compile"
+    known = release.names()
+    if options.release not in known:
+        hint = did_you_mean(options.release, known)
+        return (f"release is {shown(options.release)}, which this RoboFollow does not ship "
+                f"(releases: {', '.join(known) or 'none'}){'; ' + hint if hint else ''}")
+    digest = release.manifest(options.release).digest
+    if options.release_digest not in (None, digest):
+        return (f"release_digest is {shown(options.release_digest)}, not release "
+                f"{options.release}'s ({digest[:16]}...)")
     return None
 
 
