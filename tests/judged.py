@@ -38,18 +38,21 @@ from robofollow.sim.expert import Expert
 from robofollow.sim.rollout import Rollout
 from robofollow.sim.stage import Stage
 from robofollow.trajectory import Trajectory
-from tests.sim_helpers import episode, shipped
+from tests.sim_helpers import shipped
 
 SETTLE = 40  # control steps held at the end of every script (the evaluation's budget holds)
 
 
 class Script:
-    """A scripted motion in one episode's layout and seed."""
+    """A scripted motion in one episode's layout and seed: an episode of the release the
+    judged catalogue was recorded on, or of `benchmark` (a working compile's generated
+    tasks)."""
 
-    def __init__(self, episode_id: str):
-        self.record = episode(episode_id)
-        self.scene = shipped().spec.scenes[self.record.scene]
-        self.rollout = Rollout(shipped(), Stage(64, 48), self.record, render=False)
+    def __init__(self, episode_id: str, benchmark=None):
+        self.benchmark = benchmark or shipped()
+        self.record = self.benchmark.record(episode_id)
+        self.scene = self.benchmark.spec.scenes[self.record.scene]
+        self.rollout = Rollout(self.benchmark, Stage(64, 48), self.record, render=False)
         self.sim, self.world = self.rollout.sim, self.rollout.world
         self.asked = self.record.behaviour
         self.expert = Expert(self.sim)
@@ -187,7 +190,7 @@ class Script:
         return self.rollout.recorder.trajectory()
 
     def score(self) -> EpisodeScore:
-        return score_recording(shipped(), self.record, self.trajectory())
+        return score_recording(self.benchmark, self.record, self.trajectory())
 
 
 def analog(action: np.ndarray) -> np.ndarray:

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from robofollow import release
 from robofollow.cli import main
 from robofollow.eval.policies.loading import PolicyLoadError, load_policy
 from robofollow.eval.reports.tables import table_text
@@ -29,8 +30,7 @@ from robofollow.eval.running.runner import (
     start_hash,
 )
 from robofollow.eval.running.scores import read_scores, write_scores
-from robofollow.resources import builtin_specs
-from tests.sim_helpers import benchmark, cached_benchmark, episode
+from tests.sim_helpers import episode, shipped
 
 SCENE, LEVEL = "scene1", "L0"  # 16 tasks: one round is 16 episodes
 
@@ -38,14 +38,15 @@ SCENE, LEVEL = "scene1", "L0"  # 16 tasks: one round is 16 episodes
 def _options(policy: str = "expert", **changes) -> EvalOptions:
     fields = {"policy": policy, "scenes": (SCENE,), "levels": (LEVEL,), "rounds": 1,
               "instruction_mode": "normal", "video": "none",
-              "spec_digest": benchmark().spec.digest}
+              "spec_digest": shipped().spec.digest, "release": shipped().release,
+              "release_digest": shipped().release_digest}
     return EvalOptions(**{**fields, **changes})
 
 
 @pytest.fixture(scope="module")
 def expert_run(tmp_path_factory) -> Path:
     out = tmp_path_factory.mktemp("eval") / "expert"
-    evaluate(cached_benchmark(), out, _options(), progress=False)
+    evaluate(shipped(), out, _options(), progress=False)
     return out
 
 
@@ -72,7 +73,8 @@ def test_the_expert_run_records_every_episode_and_scores_in_full(expert_run):
     assert first["intent"] == first["execution"] == first["weight"] and set(record["hashes"]) == {
         "episode", "split", "instruction", "initial_state", "start", "trajectory"}
     assert record["start_tolerance_m"] == START_TOLERANCE_M
-    assert summary["splits"] == {SCENE: [benchmark().split_digests[SCENE][:16]]}
+    assert summary["splits"] == {SCENE: [release.manifest(shipped().release)
+                                         .scenes[SCENE].split[:16]]}
     scores = read_scores(expert_run / SCORES)
     assert [row["episode"] for row in scores] == sorted(r["episode"] for r in results)
     assert all(row["intent"] == row["execution"] == 1.0 and row["complete"] for row in scores)
@@ -89,7 +91,7 @@ def test_the_expert_run_records_every_episode_and_scores_in_full(expert_run):
 def test_a_killed_run_resumes_with_every_episode_once_and_the_same_summary(expert_run,
                                                                           tmp_path):
     out = tmp_path / "broken"
-    args = ["eval", "--policy", "expert", "--out", str(out), "--specs", str(builtin_specs()),
+    args = ["eval", "--policy", "expert", "--out", str(out),
             "--scenes", SCENE, "--levels", LEVEL, "--rounds", "1", "--workers", "2", "--quiet"]
     process = subprocess.Popen([sys.executable, "-m", "robofollow.cli", *args],
                                start_new_session=True, stdout=subprocess.DEVNULL,
@@ -130,14 +132,14 @@ def test_a_run_folder_is_not_reused_with_other_options(tmp_path):
          "task": "scene2/L0/pickup_left_cube", "intent_score": 0.0, "execution_score": 0.0,
          "complete": False}) + "\n")
     with pytest.raises(EvalRunError, match="rounds differ"):
-        evaluate(cached_benchmark(), out, _options(rounds=2), resume=True, progress=False)
+        evaluate(shipped(), out, _options(rounds=2), resume=True, progress=False)
     with pytest.raises(EvalRunError, match="already holds a run"):
-        evaluate(cached_benchmark(), out, _options(), progress=False)
+        evaluate(shipped(), out, _options(), progress=False)
     other = tmp_path / "other"
     other.mkdir()
     (other / "mine.txt").write_text("x")
     with pytest.raises(EvalRunError, match="not empty and holds no run"):
-        evaluate(cached_benchmark(), other, _options(), progress=False)
+        evaluate(shipped(), other, _options(), progress=False)
 
 
 class Holder:
@@ -181,7 +183,7 @@ def test_policies_load_by_name_or_module_factory_with_clear_errors():
 
 def test_the_instruction_controls():
     record = episode("scene2/L0/pickup_left_cube#r1")
-    compiled = benchmark()
+    compiled = shipped()
     assert given_instruction(compiled, record, "normal") == record.instruction
     assert given_instruction(compiled, record, "empty") == ""
     shuffled = given_instruction(compiled, record, "shuffled")
@@ -192,22 +194,21 @@ def test_the_instruction_controls():
 
 
 def test_eval_rejects_unknown_scenes_and_levels(capsys, tmp_path):
-    assert main(["eval", "--policy", "noop", "--out", str(tmp_path / "r"), "--specs",
-                 str(builtin_specs()), "--levels", "L9"]) == 2
+    assert main(["eval", "--policy", "noop", "--out", str(tmp_path / "r"), "--levels", "L9"]) == 2
     assert "unknown level L9; known: L0, L1, L2, L3" in capsys.readouterr().err
 
 
 @pytest.mark.slow
 def test_eval_can_be_limited_to_named_tasks(tmp_path, capsys):
     out = tmp_path / "two"
-    args = ["eval", "--policy", "noop", "--out", str(out), "--specs", str(builtin_specs()),
+    args = ["eval", "--policy", "noop", "--out", str(out),
             "--rounds", "1", "--workers", "1", "--quiet", "--tasks",
             "scene2/L0/pickup_left_cube,scene4/L1/s41_l_pick_red_not_in_bowl@scene4_4"]
     assert main(args) == 0
     assert sorted(r["task"] for r in read_results(out / "episodes.jsonl")) == [
         "scene2/L0/pickup_left_cube", "scene4/L1/s41_l_pick_red_not_in_bowl@scene4_4"]
-    assert main(["eval", "--policy", "noop", "--out", str(tmp_path / "x"), "--specs",
-                 str(builtin_specs()), "--tasks", "scene2/L0/pickup_left_cub"]) == 2
+    assert main(["eval", "--policy", "noop", "--out", str(tmp_path / "x"),
+                 "--tasks", "scene2/L0/pickup_left_cub"]) == 2
     error = capsys.readouterr().err
     assert "unknown task scene2/L0/pickup_left_cub;" in error
     assert "did you mean scene2/L0/pickup_left_cube" in error
@@ -217,7 +218,7 @@ def test_eval_can_be_limited_to_named_tasks(tmp_path, capsys):
 @pytest.mark.parametrize("mode", ["shuffled", "empty"])
 def test_a_run_given_other_instructions_records_the_tasks_own(tmp_path, mode):
     out = tmp_path / mode
-    assert main(["eval", "--policy", "noop", "--out", str(out), "--specs", str(builtin_specs()),
+    assert main(["eval", "--policy", "noop", "--out", str(out),
                  "--rounds", "1", "--workers", "1", "--quiet", "--instruction-mode", mode,
                  "--tasks", "scene2/L0/pickup_left_cube"]) == 0
     [record] = read_results(out / "episodes.jsonl")
@@ -227,9 +228,9 @@ def test_a_run_given_other_instructions_records_the_tasks_own(tmp_path, mode):
 
 
 def test_a_sample_keeps_n_tasks_of_every_scene_and_level_spread_over_its_list():
-    every = select_episodes(cached_benchmark(), _options(scenes=("scene1", "scene4"),
+    every = select_episodes(shipped(), _options(scenes=("scene1", "scene4"),
                                                   levels=("L0", "L1")))
-    sampled = select_episodes(cached_benchmark(), _options(scenes=("scene1", "scene4"),
+    sampled = select_episodes(shipped(), _options(scenes=("scene1", "scene4"),
                                                     levels=("L0", "L1"), sample=3))
     for scene in ("scene1", "scene4"):
         for level in ("L0", "L1"):
@@ -237,7 +238,7 @@ def test_a_sample_keeps_n_tasks_of_every_scene_and_level_spread_over_its_list():
                                        if (e.scene, e.level) == (scene, level)))
             kept = [e.task for e in sampled if (e.scene, e.level) == (scene, level)]
             assert kept == [tasks[0], tasks[len(tasks) // 3], tasks[2 * len(tasks) // 3]]
-    assert len(select_episodes(cached_benchmark(), _options(sample=100))) == 16  # fewer tasks: all
+    assert len(select_episodes(shipped(), _options(sample=100))) == 16  # fewer tasks: all
 
 
 def test_a_hung_in_process_policy_is_cut_at_its_time_limit_in_the_worker_pool(tmp_path,
@@ -245,8 +246,7 @@ def test_a_hung_in_process_policy_is_cut_at_its_time_limit_in_the_worker_pool(tm
     out = tmp_path / "hung"
     two = "scene2/L0/pickup_left_cube,scene1/L0/pickup_yellow_block_2"
     args = ["eval", "--policy", "tests.test_eval_runner:make_sleeper", "--out", str(out),
-            "--specs", str(builtin_specs()), "--rounds", "1", "--workers", "2", "--quiet",
-            "--tasks", two, "--policy-timeout", "1"]
+            "--rounds", "1", "--workers", "2", "--quiet", "--tasks", two, "--policy-timeout", "1"]
     assert main(args) == 3  # finished, with policy failures
     assert "2 of 2 episodes ended in a policy failure" in capsys.readouterr().out
     results = read_results(out / "episodes.jsonl")
@@ -254,7 +254,7 @@ def test_a_hung_in_process_policy_is_cut_at_its_time_limit_in_the_worker_pool(tm
         ("step 0: the policy did not answer within 1 s", 0)] * 2
     assert json.loads((out / "run.json").read_text())["policy_timeout"] == 1.0
     assert main(["eval", "--policy", "ws://localhost:8000", "--out", str(tmp_path / "ws"),
-                 "--specs", str(builtin_specs()), "--policy-timeout", "5"]) == 2
+                 "--policy-timeout", "5"]) == 2
     assert "a server takes its own: --policy URL?timeout=S&retries=N" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(args[:-1] + ["0"])

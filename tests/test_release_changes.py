@@ -25,7 +25,8 @@ from tests.sim_helpers import SHIPPED_RELEASE, shipped
 pytestmark = pytest.mark.slow
 
 RESULTS = Path(__file__).resolve().parents[1] / "docs" / "results"
-LAYOUT = ("    layout scene1_4 from default { swap red_sphere red_cylinder }\n")
+ADDED = "scene1_added"  # the layout the tests add to Scene 1
+LAYOUT = f"    layout {ADDED} from default {{ swap red_sphere red_cylinder }}\n"
 
 
 def _specs(tmp_path: Path, change) -> Path:
@@ -40,8 +41,7 @@ def _specs(tmp_path: Path, change) -> Path:
 def _added_layout(text: str) -> str:
     """Scene 1 with a fourth layout, listed in its L1 and L3 rules."""
     text = text.replace("    split L0 rounds=10", LAYOUT + "\n    split L0 rounds=10", 1)
-    return text.replace("layouts=(scene1_1, scene1_2, scene1_3)",
-                        "layouts=(scene1_1, scene1_2, scene1_3, scene1_4)")
+    return text.replace("layouts=(scene1_1,", f"layouts=({ADDED}, scene1_1,")
 
 
 def _moved_jitter(text: str) -> str:
@@ -52,34 +52,36 @@ def _moved_jitter(text: str) -> str:
 
 @pytest.fixture(scope="module")
 def added_layout(tmp_path_factory):
-    """The built-in specs with a Scene 1 layout added, compiled, and frozen as v2 beside v1."""
+    """The working compile of the built-in specs frozen as va, and with a Scene 1 layout
+    added as vb (whatever the generator is now: neither is a shipped release)."""
     root = tmp_path_factory.mktemp("added")
-    compiled = compile_specs(_specs(root, _added_layout))
+    before, after = compile_specs(builtin_specs()), compile_specs(_specs(root, _added_layout))
     releases = root / "releases"
-    shutil.copytree(release.releases_dir() / SHIPPED_RELEASE, releases / SHIPPED_RELEASE)
-    release.freeze(compiled, "v2", releases)
-    return compiled, releases
+    release.freeze(before, "v100", releases)
+    release.freeze(after, "v101", releases)
+    return before, after, releases
 
 
 def test_an_added_layout_changes_no_other_episodes_hash(added_layout):
-    compiled, _ = added_layout
-    working = compiled_cache.of(compiled)
-    before = release.content_hashes(shipped())
+    compiled, changed, _ = added_layout
+    working = compiled_cache.of(changed)
+    before = release.content_hashes(compiled_cache.of(compiled))
     after = {e: json.loads(line)["hash"] for e, line in zip(working.ids, working.lines,
                                                              strict=True)}
     assert after == release.content_hashes(working)  # a build's records carry this hash
-    assert any(e.startswith("scene1/L1/") and e.endswith("@scene1_4#r1") for e in after)
+    assert any(e.startswith("scene1/L1/") and e.endswith(f"@{ADDED}#r1") for e in after)
     for prefix in ("scene1/L0/", "scene2/", "scene3/", "scene4/"):
         kept = [e for e in before if e.startswith(prefix)]
         assert kept and all(after.get(e) == before[e] for e in kept), prefix
 
 
 def test_release_diff_counts_what_an_added_layout_changed(added_layout, monkeypatch):
-    compiled, releases = added_layout
+    _, _, releases = added_layout
     rows = {(r["scene"], r["level"]): r for r in release.diff(
-        release.load(SHIPPED_RELEASE, releases), release.load("v2", releases))}
-    assert rows["scene1", "L0"]["episodes"] == {"added": 0, "removed": 0, "changed": 0,
-                                                "unchanged": 160}
+        release.load("v100", releases), release.load("v101", releases))}
+    l0 = rows["scene1", "L0"]
+    assert l0["episodes"] == {"added": 0, "removed": 0, "changed": 0,
+                              "unchanged": l0["episodes"]["unchanged"]} and l0["same"]
     assert rows["scene1", "L1"]["tasks"]["added"] >= 1
     assert rows["scene1", "L1"]["episodes"]["changed"] == 0
     for scene in ("scene2", "scene3", "scene4"):
@@ -88,8 +90,9 @@ def test_release_diff_counts_what_an_added_layout_changed(added_layout, monkeypa
             assert counts["unchanged"] > 0 and counts["added"] == counts["removed"] == \
                 counts["changed"] == 0, (scene, level)
     monkeypatch.setattr(release, "releases_dir", lambda: releases)
-    text = release_diff(SHIPPED_RELEASE, "v2")
-    assert "| scene1 L0 | 0 | 0 | 0 | 16 | 0 | 0 | 0 | 160 |" in text
+    tasks, episodes = l0["tasks"]["unchanged"], l0["episodes"]["unchanged"]
+    assert (f"| scene1 L0 | 0 | 0 | 0 | {tasks} | 0 | 0 | 0 | {episodes} |"
+            in release_diff("v100", "v101"))
 
 
 def _run(folder: Path, benchmark, episodes: list[str], intent: float) -> Path:

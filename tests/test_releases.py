@@ -176,3 +176,19 @@ def test_a_run_names_its_release_or_its_working_compile(tmp_path):
     (on_release / "run.json").write_text(json.dumps(before))
     (on_release / "summary.json").unlink()  # (a run still under way)
     assert main(["eval", *QUICK, "--out", str(on_release), "--resume"]) == 0
+
+
+def test_the_release_command_lists_shows_and_states(capsys, monkeypatch):
+    assert main(["release", "list"]) == 0
+    listed = capsys.readouterr().out
+    found = release.manifest(SHIPPED_RELEASE)
+    assert f"* {SHIPPED_RELEASE}" in listed and f"{found.episodes:,}" in listed
+    assert main(["release", "show", SHIPPED_RELEASE]) == 0
+    shown = capsys.readouterr().out
+    assert found.digest in shown and found.scenes["scene1"].split[:12] in shown
+    assert main(["release", "show", "v0"]) == 1
+    assert "no release 'v0' (releases: v1" in capsys.readouterr().err
+    assert main(["release", "diff", "v1", "v1"]) == 2
+    monkeypatch.chdir(ROOT)
+    assert main(["release", "state", "docs/results"]) == 0
+    assert capsys.readouterr().out == (RESULTS / "state.md").read_text()
