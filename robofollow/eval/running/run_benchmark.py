@@ -26,7 +26,7 @@ def run_release(options: EvalOptions) -> str | None:
 
 
 def described(options: EvalOptions) -> str:
-    """The run's benchmark in words: 'release v1 (30bc9fa66a2e)' or 'a working compile of
+    """The run's benchmark in words: 'release v1 (digest 30bc9fa66a2e)' or 'a working compile of
     SPECS (spec digest cae10a3dc698), not a release'."""
     name = run_release(options)
     if name is not None:
