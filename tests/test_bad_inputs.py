@@ -109,6 +109,12 @@ CASES = [
         "eval", *SMALL, "--shard", "1/3", "--out", str(t / "r")], 2, "at most 2 shards"),
     ("a shard that is not digits", lambda t, s: [
         "eval", *SMALL, "--shard", "1/²", "--out", str(t / "r")], 2, "expected I/N"),
+    ("a server timeout of NaN", lambda t, s: [
+        "eval", "--policy", "tcp://127.0.0.1:9?timeout=nan", "--out", str(t / "r")], 1,
+     "finite number of seconds"),
+    ("an infinite server timeout", lambda t, s: [
+        "eval", "--policy", "ws://127.0.0.1:9?timeout=inf", "--out", str(t / "r")], 1,
+     "finite number of seconds"),
     ("serve on every interface", lambda t, s: ["serve", "--policy", "noop", "--host", ""], 2,
      "--allow-remote"),
     ("serve on a port past 65535", lambda t, s: ["serve", "--policy", "noop", "--port",

@@ -56,3 +56,18 @@ def test_the_other_run_and_a_shard_are_checked_first(tmp_path, capsys):
                  "--shard", "1/2", "--out", str(tmp_path / "run")]) == 2
     assert "a shard is a part of one" in capsys.readouterr().err
     assert not (tmp_path / "run").exists()
+
+
+def test_rounds_past_the_benchmarks_own_stop_at_its_last_round(noop, tmp_path, capsys):
+    """--rounds beyond the rounds the benchmark holds looks once per round it holds (10),
+    then stops, said on stderr: no pass with nothing to run."""
+    run = tmp_path / "many"
+    assert main(["eval", "--policy", "noop", "--scenes", "scene1", "--levels", "L0",
+                 "--sample", "1", "--workers", "1", "--quiet", "--rounds", "1000000",
+                 "--until-separated", str(noop), "--out", str(run)]) == 0
+    stopped = json.loads((run / "sequential.json").read_text())
+    assert stopped["looks"] == 10 and stopped["stopped_after_round"] == 10
+    assert stopped["threshold"] == pytest.approx(0.05 / 10) and _rounds(run) == set(range(1, 11))
+    err = capsys.readouterr().err
+    assert "--rounds 1000000: the benchmark holds 10 rounds of these tasks, so at most 10 looks" \
+        in err and "after round 11" not in err

@@ -155,7 +155,7 @@ def test_compare_writes_a_page_with_a_forest_plot_per_metric(tmp_path):
     assert (out / "compare.md").read_text() == markdown(compare_runs(a, b))
 
 
-def _pilot(tmp_path, name, between, within, tasks=40, rounds=10, seed=0):
+def _pilot(tmp_path, name, between, within, tasks=40, rounds=10, seed=0, scene="scene1"):
     """A one-level pilot: task means spread by `between`, rounds by `within` (0-1 scale)."""
     rng = np.random.default_rng(seed)
     records = []
@@ -163,8 +163,8 @@ def _pilot(tmp_path, name, between, within, tasks=40, rounds=10, seed=0):
         mean = 0.5 + rng.normal(0, between)
         for round_index in range(1, rounds + 1):
             value = float(np.clip(mean + rng.normal(0, within), 0, 1))  # (scores' range)
-            records.append({"episode": f"scene1/L2/t{task}#r{round_index}", "scene": "scene1",
-                            "level": "L2", "task": f"scene1/L2/t{task}",
+            records.append({"episode": f"{scene}/L2/t{task}#r{round_index}", "scene": scene,
+                            "level": "L2", "task": f"{scene}/L2/t{task}",
                             "hashes": {"episode": f"h{task}-{round_index}"},
                             "intent_score": value, "execution_score": value,
                             "complete": value > 0.5})
@@ -258,3 +258,16 @@ def test_the_command_plans_by_cell_and_refuses_by_without_power(tmp_path, capsys
     assert "| Cell | tasks |" in out and "| scene1 L2 | 40 | 10 |" in out and "power reached" in out
     assert main(["compare", str(pilot), str(pilot), "--by", "cell"]) == 2
     assert "--by shape the plan --power makes" in capsys.readouterr().err
+
+
+def test_no_plan_is_made_from_pilots_that_share_no_episode_or_hold_one_round(tmp_path, capsys):
+    """Two pilots with no episode in common, or a pilot of one round per task (its spread
+    within a task unknown), get a one-line refusal, not an empty table or 'power 100%'."""
+    pilot = _pilot(tmp_path, "pilot", between=0.1, within=0.2)
+    other = _pilot(tmp_path, "other", between=0.1, within=0.2, scene="scene3")
+    assert main(["compare", str(pilot), str(other), "--power", "10"]) == 1
+    assert "the pilots share no episode" in capsys.readouterr().err
+    single = _pilot(tmp_path, "single", between=0.1, within=0.2, rounds=1)
+    assert main(["compare", str(single), "--power", "10"]) == 1
+    err = capsys.readouterr().err
+    assert "one round of every task of L2" in err and len(err.splitlines()) == 1

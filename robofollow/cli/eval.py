@@ -220,25 +220,29 @@ def _until_separated(compiled, options, args) -> tuple[dict, int]:
     (sequential.py); the summary and the last round run."""
     from robofollow.eval.reports.comparison import compare_runs, run_scores
     from robofollow.eval.running.run_folder import safe_path
-    from robofollow.eval.running.runner import evaluate
+    from robofollow.eval.running.runner import evaluate, select_episodes
     from robofollow.eval.statistics.sequential import SEQUENTIAL, look, record
     from robofollow.files import write_json_atomic
 
     other = Path(args.until_separated)
     run_scores(other)  # a run with episodes, said before anything runs
     out = Path(args.out)
-    for round_index in range(1, options.rounds + 1):
+    looks = min(options.rounds, max(e.round for e in select_episodes(compiled, options)))
+    if looks < options.rounds:
+        print(f"--rounds {options.rounds}: the benchmark holds {looks} rounds of these tasks, "
+              f"so at most {looks} looks", file=sys.stderr)
+    for round_index in range(1, looks + 1):
         result = evaluate(compiled, out, options, args.workers,
                           args.resume or round_index > 1, progress=not args.quiet,
                           executor=args.executor, drop_corrupt=args.drop_corrupt,
                           up_to_round=round_index)
-        taken = look(compare_runs(out, other)["rows"], round_index, options.rounds)
+        taken = look(compare_runs(out, other)["rows"], round_index, looks)
         print(f"after round {round_index}: average Intent {taken.difference:+.1f} against "
               f"{other.name}, p = {taken.p:.3g} (separated below {taken.threshold:.3g})",
               file=sys.stderr)
         if taken.separated:
             break
-    write_json_atomic(safe_path(out, SEQUENTIAL), record(taken, other, options.rounds))
+    write_json_atomic(safe_path(out, SEQUENTIAL), record(taken, other, looks))
     return result, taken.round
 
 

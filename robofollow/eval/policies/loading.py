@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import importlib
 import importlib.util
+import math
 from urllib.parse import parse_qsl, urlsplit
 
 from robofollow.errors import RoboFollowError, UsageError, did_you_mean
@@ -126,10 +127,12 @@ def _server_settings(spec: str):
         raise PolicyLoadError(f"--policy {spec!r}: expected {address.scheme}://HOST:PORT "
                               "with optional ?timeout=SECONDS&retries=N&max_message=BYTES"
                               "&privileged=1")
-    if (settings.get("timeout", 1) <= 0 or settings.get("retries", 0) < 0
+    timeout = settings.get("timeout", 1)
+    if (not (math.isfinite(timeout) and timeout > 0) or settings.get("retries", 0) < 0
             or settings.get("max_message", 1) < 1 or settings.get("privileged", 0) not in (0, 1)):
-        raise PolicyLoadError(f"--policy {spec!r}: timeout and max_message must be positive, "
-                              "retries at least 0, privileged 0 or 1")
+        raise PolicyLoadError(f"--policy {spec!r}: timeout must be a finite number of seconds "
+                              "above 0, max_message positive, retries at least 0, privileged "
+                              "0 or 1")
     settings["privileged"] = bool(settings.get("privileged", 0))
     return address, settings
 

@@ -29,9 +29,14 @@ import numpy as np
 from scipy import stats
 
 from robofollow.compiler.scene.spec import LEVELS
+from robofollow.errors import RoboFollowError
 from robofollow.eval.statistics.paired import FIELDS, pair
 
 MAX_ROUNDS = 1000  # a plan beyond this many rounds per task is reported as out of reach
+
+
+class PowerError(RoboFollowError):
+    """Pilots that a plan cannot be made from."""
 
 
 def _key(row: dict, by: str) -> str:
@@ -68,8 +73,17 @@ def plan(runs: list[list[dict]], delta: float, metric: str = "IS", power: float 
     tasks unlimited rounds would need) and the power its own tasks and rounds reach
     ("reached")."""
     episodes = _series(runs, metric, by)
+    if not episodes:
+        raise PowerError("the pilots share no episode: there is nothing to plan from (were "
+                         "they run on the same test set?)" if len(runs) > 1 else
+                         "the pilot holds no episode: there is nothing to plan from")
     twice = 2.0 if len(runs) == 1 else 1.0  # one run: a difference varies like two
     groups = sorted(episodes, key=_order)
+    single = [g for g in groups if all(len(t) < 2 for t in episodes[g].values())]
+    if single:
+        raise PowerError(f"the pilot has one round of every task of {', '.join(single)}: the "
+                         "spread within a task cannot be estimated from it; plan from a "
+                         "pilot of two rounds or more (eval --rounds 2)")
     level_z = stats.norm.ppf(1 - alpha / (2 * max(len(groups), 1)))
     z = level_z + stats.norm.ppf(power)
     target = (delta / z) ** 2  # the variance the difference may have
