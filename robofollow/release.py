@@ -188,6 +188,10 @@ def check_new(name: str, folder: Path | None = None) -> Path:
     if not NAME.fullmatch(name):
         raise ReleaseError(f"release name {name!r}: expected v followed by a version, such as "
                            "v2 or v2.1")
+    if folder is None and not (releases_dir().parent.parent / "pyproject.toml").is_file():
+        raise ReleaseError(f"RoboFollow is installed here ({releases_dir().parent}), not a "
+                           "source checkout: releases are frozen in a checkout of the "
+                           "project, never into an installed package")
     target = (folder or releases_dir()) / name
     if target.exists():
         raise ReleaseError(f"release {name} exists ({target}); a release never changes once "

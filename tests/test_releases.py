@@ -192,3 +192,12 @@ def test_the_release_command_lists_shows_and_states(capsys, monkeypatch):
     monkeypatch.chdir(ROOT)
     assert main(["release", "state", "docs/results"]) == 0
     assert capsys.readouterr().out == (RESULTS / "state.md").read_text()
+
+
+def test_no_release_is_frozen_into_an_installed_package(tmp_path, monkeypatch):
+    installed = tmp_path / "site-packages" / "robofollow" / "releases"
+    installed.mkdir(parents=True)
+    monkeypatch.setattr(release, "releases_dir", lambda: installed)
+    with pytest.raises(release.ReleaseError, match="not a source checkout"):
+        release.check_new("v2")
+    assert release.check_new("v2", tmp_path) == tmp_path / "v2"  # (a folder named: anywhere)

@@ -53,6 +53,34 @@ def test_a_finished_run_resumed_is_read_not_written(finished, tmp_path, capsys):
     assert {name: _files(run)[name] for name in kept} == kept
 
 
+def test_a_shipped_run_with_an_emptied_results_file_is_not_run_again(tmp_path, capsys):
+    """`touch RUN/episodes.jsonl` beside a shipped run's scores does not make --resume run
+    its 6,350 episodes again over them: refused before anything runs."""
+    run = tmp_path / "noop"
+    shutil.copytree(RESULTS / "noop", run)
+    (run / "episodes.jsonl").touch()
+    before = _files(run)
+    assert main(["eval", "--policy", "noop", "--out", str(run), "--resume", "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert "keeps 0 of the 6350 episodes its summary counts; it is not resumed" in err
+    assert _files(run) == before
+
+
+def test_a_resume_that_runs_nothing_adds_no_environment(finished, tmp_path, capsys):
+    """A finished run resumed in another environment (another NumPy, say) runs nothing, so
+    its provenance stays as it was."""
+    run = tmp_path / "run"
+    shutil.copytree(finished, run)
+    options = json.loads((run / "run.json").read_text())
+    options["provenance"][0]["numpy"] = "2.3.5"
+    (run / "run.json").write_text(json.dumps(options))
+    before = (run / "run.json").read_bytes()
+    assert main(["eval", *RUN, "--out", str(run), "--resume"]) == 0
+    err = capsys.readouterr().err
+    assert "nothing to run" in err and "another environment" not in err
+    assert (run / "run.json").read_bytes() == before
+
+
 @pytest.mark.parametrize("linked", ["report.html", "tasks.html", "table1.csv", "figures"])
 def test_no_write_follows_a_link_out_of_the_run(finished, tmp_path, capsys, linked):
     run = tmp_path / "run"
@@ -135,6 +163,22 @@ def test_two_comparisons_never_share_a_folder(tmp_path, capsys):
         assert result["b"] == str(other)
 
 
+def test_runs_whose_paths_read_alike_when_joined_get_folders_of_their_own(tmp_path, capsys):
+    """p/a/b-c and p/a-b/c join to one name: the later gets -2, and no comparison is lost."""
+    a = RESULTS / "expert"
+    others = [tmp_path / "p" / "a" / "b-c", tmp_path / "p" / "a-b" / "c",
+              tmp_path / "q" / "a" / "b-c"]
+    for other in others:
+        shutil.copytree(RESULTS / "noop", other)
+    out = tmp_path / "d"
+    assert main(["compare", str(a), *map(str, others), "--out", str(out)]) == 0
+    capsys.readouterr()
+    written = sorted(p.name for p in out.iterdir())
+    assert written == ["expert-vs-p-a-b-c", "expert-vs-p-a-b-c-2", "expert-vs-q-a-b-c"]
+    assert sorted(json.loads((out / name / "compare.json").read_text())["b"]
+                  for name in written) == sorted(map(str, others))
+
+
 @pytest.mark.parametrize("shard", ["1/99999999999999999999", "1/100", "1/²"])
 def test_a_shard_count_is_bounded_by_the_episodes(tmp_path, capsys, shard):
     assert main(["eval", *RUN, "--shard", shard, "--out", str(tmp_path / "run")]) == 2
@@ -166,3 +210,15 @@ def test_a_merge_records_and_names_every_environment_its_shards_ran_in(tmp_path,
     assert "the shards ran in different environments (mujoco" in capsys.readouterr().err
     made = json.loads((tmp_path / "merged" / "run.json").read_text())["provenance"]
     assert [entry["mujoco"] for entry in made] == [made[0]["mujoco"], "4.0.1"]
+
+
+def test_a_report_says_which_declared_control_arm_is_missing(tmp_path, capsys):
+    """A run whose run.json declares a control arm its folder lacks (a copy without it, a
+    merge cut short) is reported with a warning naming the arm, never silently without it."""
+    run = tmp_path / "run"
+    assert main(["eval", *RUN, "--controls", "empty", "--out", str(run)]) == 0
+    shutil.rmtree(run / "controls" / "empty")
+    capsys.readouterr()
+    assert main(["report", str(run)]) == 0
+    err = capsys.readouterr().err
+    assert "declares the control arm(s) empty, which" in err and "lacks" in err

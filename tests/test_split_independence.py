@@ -113,3 +113,33 @@ def test_one_shipped_spec_file_is_checked_against_its_folders_lock(tmp_path, cap
     assert main(["compile", str(builtin_specs() / "scene2.rf"), "--out",
                  str(tmp_path / "out2"), "--update-lock"]) == 1
     assert "--update-lock needs a specs folder" in capsys.readouterr().err
+
+
+def test_the_lock_is_rewritten_only_in_a_specs_folder_that_is_named(tmp_path, capsys,
+                                                                     monkeypatch):
+    """`--update-lock` without SPECS would rewrite the built-in benchmark's lock (or
+    ./specs'): it is refused, and no lock is touched."""
+    monkeypatch.chdir(tmp_path)
+    lock = builtin_specs() / "splits.lock"
+    before = lock.read_bytes()
+    assert main(["compile", "--out", str(tmp_path / "out"), "--update-lock"]) == 2
+    assert "name the specs folder to pin" in capsys.readouterr().err
+    assert lock.read_bytes() == before and not (tmp_path / "out").exists()
+
+
+@pytest.mark.parametrize("lock,why", [
+    ('{"scenes": {"scene2": {"split": "abc", "tasks": "many"}}}', "scene 'scene2': 'tasks' must map levels"),
+    ('{"scenes": ["scene2"]}', 'no "scenes" object'),
+    (None, "not a regular file"),
+])
+def test_a_lock_that_is_not_a_split_lock_is_one_line(tmp_path, capsys, lock, why):
+    folder = tmp_path / "specs"
+    folder.mkdir()
+    shutil.copy(builtin_specs() / "scene2.rf", folder)
+    if lock is None:
+        (folder / LOCK_FILE).mkdir()
+    else:
+        (folder / LOCK_FILE).write_text(lock)
+    assert main(["compile", str(folder), "--out", str(tmp_path / "out"), "--no-verify"]) == 1
+    err = capsys.readouterr().err
+    assert f"not a split lock ({why}" in err and len(err.splitlines()) == 1, err

@@ -5,14 +5,13 @@ differ in simulation); `robofollow compile --update-lock` writes it."""
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 
 from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.scene.spec import LEVELS
 from robofollow.errors import RoboFollowError
-from robofollow.files import write_json_atomic
+from robofollow.files import read_json_file, write_json_atomic
 
 LOCK_FILE = "splits.lock"
 
@@ -32,20 +31,38 @@ def lock_path(specs: Path | list[Path]) -> Path | None:
     return (specs if specs.is_dir() else specs.parent) / LOCK_FILE
 
 
+MAX_LOCK_BYTES = 1024 * 1024  # the shipped lock is under 1 KB
+
+
+def _lock_problem(data) -> str | None:
+    """What is wrong with a lock's content: {"scenes": {scene: {"split": digest, "tasks":
+    {level: count}}}}."""
+    scenes = data.get("scenes") if isinstance(data, dict) else None
+    if not isinstance(scenes, dict):
+        return "no \"scenes\" object"
+    for scene, entry in scenes.items():
+        if not isinstance(entry, dict) or not isinstance(entry.get("split"), str):
+            return f"scene {scene!r} needs a 'split' digest"
+        tasks = entry.get("tasks", {})
+        if not isinstance(tasks, dict) or not all(
+                level in LEVELS and isinstance(n, int) and not isinstance(n, bool) and n >= 0
+                for level, n in tasks.items()):
+            return f"scene {scene!r}: 'tasks' must map levels ({', '.join(LEVELS)}) to counts"
+    return None
+
+
 def read_lock(path: Path | None) -> dict[str, dict]:
-    """The pinned scenes ({} when there is no lock file)."""
-    if path is None or not path.is_file():
+    """The pinned scenes ({} when there is no lock file); RoboFollowError for a lock that is
+    not a regular file, is too large, or is not a split lock."""
+    if path is None or not (path.exists() or path.is_symlink()):
         return {}
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-        scenes = data["scenes"]
-        if not all(isinstance(v, dict) and isinstance(v.get("split"), str)
-                   for v in scenes.values()):
-            raise ValueError("every scene needs a 'split' digest")
-    except (OSError, ValueError, KeyError, TypeError, AttributeError) as error:
-        raise RoboFollowError(f"{path}: not a split lock ({error}); rewrite it with "
-                              "`robofollow compile SPECS --out DIR --update-lock`") from None
-    return scenes
+    data, problem = (None, "not a regular file") if not path.is_file() else \
+        read_json_file(path, MAX_LOCK_BYTES)
+    problem = problem or _lock_problem(data)
+    if problem:
+        raise RoboFollowError(f"{path}: not a split lock ({problem}); rewrite it with "
+                              "`robofollow compile SPECS --out DIR --update-lock`")
+    return data["scenes"]
 
 
 def write_lock(path: Path, compiled: Compiled) -> None:

@@ -36,7 +36,7 @@ def add_compile(commands) -> None:
                         "(exit status 1)")
     p.add_argument("--update-lock", action="store_true",
                    help="pin every scene's split digest and task counts in SPECS/splits.lock "
-                        "(a clean build only)")
+                        "(a clean build only; SPECS must be given)")
     p.add_argument("--release", metavar="NAME",
                    help="freeze the build as benchmark release NAME (e.g. v2) in the package's "
                         "releases, for eval --release NAME: a clean build whose every scene "
@@ -65,6 +65,9 @@ def cmd_compile(args) -> int:
         if args.no_verify:
             raise UsageError("--release freezes a verified build: leave out --no-verify")
         check_new(args.release)
+    if args.update_lock and args.specs is None:
+        raise UsageError("--update-lock rewrites SPECS/splits.lock: name the specs folder to "
+                         "pin (without one it would be the built-in benchmark's, or ./specs)")
     specs = specs_of(args)
     lock = lock_path(specs)
     if args.update_lock and not (isinstance(specs, Path) and specs.is_dir()):

@@ -89,17 +89,24 @@ def markdown(result: dict) -> str:
 
 def comparison_folders(a: Path, others: list[Path], out: Path) -> list[Path]:
     """Where each comparison of `others` with `a` is written: `out` for one; else
-    out/<A>-vs-<B>, each B named by as many of its last path parts as tell the runs apart
-    (two comparisons never share a folder)."""
+    out/<A>-vs-<B>, each B named by as many of its last path parts as tell the runs apart,
+    joined by "-"; where two names still read alike (p/a/b-c and p/a-b/c), the later ones get
+    -2, -3 (each compare.json names its runs). Two comparisons never share a folder."""
     if len(others) == 1:
         return [out]
-    if len({other.resolve() for other in others}) < len(others):
+    paths = [other.resolve() for other in others]
+    if len(set(paths)) < len(paths):
         raise UsageError("a run is given twice; each run is compared with the first once")
-    names = [other.name for other in others]
-    for depth in range(1, max(len(other.resolve().parts) for other in others) + 1):
-        names = ["-".join(other.resolve().parts[-depth:]) for other in others]
-        if len(set(names)) == len(names):
-            break
+    depth = next(d for d in range(1, max(len(p.parts) for p in paths) + 1)
+                 if len({p.parts[-d:] for p in paths}) == len(paths))
+    names: list[str] = []
+    for path in paths:
+        name = unique = "-".join(path.parts[-depth:])
+        count = 1
+        while unique in names:
+            count += 1
+            unique = f"{name}-{count}"
+        names.append(unique)
     return [out / f"{a.name}-vs-{name}" for name in names]
 
 

@@ -36,7 +36,9 @@ from robofollow.eval.reports.figures import (
 from robofollow.eval.reports.pages import PAGES
 from robofollow.eval.reports.report_data import report_data
 from robofollow.eval.running.run_folder import (
+    CONTROLS,
     check_folder_out,
+    control_arms,
     safe_path,
     write_text_file,
 )
@@ -66,6 +68,11 @@ def write_report(run: Path, motions: dict[str, str | None] | None = None,
     where fewer episodes are found than the run's summary counts. Returns the markdown and
     HTML reports."""
     options, results = load_run(run)
+    missing = [mode for mode in options.controls if mode not in control_arms(run)]
+    if missing:
+        print(f"warning: {run}/run.json declares the control arm(s) {', '.join(missing)}, "
+              f"which {run / CONTROLS} lacks: the report is made without them",
+              file=sys.stderr)
     counted = summarised_episodes(run)
     if counted is not None and len(results) < counted:
         raise ReportError(f"{run}: its summary counts {counted} episodes but only "

@@ -19,6 +19,7 @@ from robofollow.files import (
     changed_options,
     json_line,
     json_lines,
+    read_json_file,
     write_bytes_atomic,
     write_json_atomic,
 )
@@ -26,6 +27,8 @@ from robofollow.provenance import differences
 
 RUN_FILE, RESULTS, SUMMARY, LOCK = "run.json", "episodes.jsonl", "summary.json", ".lock"
 SCORES = "scores.csv.gz"  # the compact records a finished run keeps (scores.py)
+MAX_JSON_BYTES = 16 * 1024 * 1024  # run.json and summary.json: the shipped ones are under 1 KB
+#   and 10 KB; a run that lists every task of the benchmark (--tasks) stays under 100 KB
 DROPPED = RESULTS + ".dropped"  # corrupt lines that --drop-corrupt moved out of RESULTS
 _RECORD_FIELDS = {"episode": str, "scene": str, "level": str, "task": str,
                   "intent_score": (int, float), "execution_score": (int, float),
@@ -261,6 +264,37 @@ def finished(out: Path) -> bool:
     return (out / SUMMARY).is_file() and (out / SCORES).is_file()
 
 
+def _lines(path: Path) -> int:
+    """How many lines a file holds, read in blocks."""
+    count = 0
+    with open(path, "rb") as stream:
+        while block := stream.read(1 << 20):
+            count += block.count(b"\n")
+    return count
+
+
+def _summarised(out: Path) -> int | None:
+    """The episodes a run's summary counts (None: no summary, or one that does not say)."""
+    if not (out / SUMMARY).is_file():
+        return None
+    data, problem = read_json_file(out / SUMMARY, MAX_JSON_BYTES)
+    count = data.get("episodes") if isinstance(data, dict) and not problem else None
+    return count if isinstance(count, int) and not isinstance(count, bool) else None
+
+
+def check_whole(out: Path) -> None:
+    """EvalRunError for a finished run whose results file holds fewer lines than its summary
+    counts episodes (an emptied or replaced file): resuming it would run its episodes again
+    over its scores. (Corrupt lines count: --drop-corrupt repairs those.)"""
+    if not (finished(out) and (out / RESULTS).is_file()):
+        return
+    kept, counted = _lines(out / RESULTS), _summarised(out)
+    if counted is not None and kept < counted:
+        raise EvalRunError(f"{out} holds a finished run whose {RESULTS} keeps {kept} of the "
+                           f"{counted} episodes its summary counts; it is not resumed (its "
+                           "episodes would run again over its scores): choose another folder")
+
+
 def check_prepare(out: Path, options: dict, resume: bool) -> None:
     """Why the run folder cannot take this run (new, or resumed with the same options), said
     before anything is written. A run that keeps only its scores (as docs/results' do) is
@@ -280,6 +314,7 @@ def check_prepare(out: Path, options: dict, resume: bool) -> None:
         raise EvalRunError(f"{out} holds a finished run that keeps only its scores "
                            f"({SCORES}, no {RESULTS}); it cannot be resumed or written over: "
                            "choose another folder")
+
     problem = changed_options(_named_release(previous) if isinstance(previous, dict) else {},
                               _named_release(options))
     if problem:
@@ -297,15 +332,17 @@ def _named_release(recorded: dict) -> dict:
     return dict(recorded, release=name, release_digest=release.manifest(name).digest)
 
 
-def prepare(out: Path, options: dict, resume: bool, environment: dict) -> None:
+def prepare(out: Path, options: dict, resume: bool, environment: dict | None) -> None:
     """Record a new run's options and the environment that runs it (a folder with no
     finished episode counts as new), or check that a resumed run has the same options; a
     resume in another environment is said, naming what differs, and added to the run's
-    provenance."""
+    provenance (`environment` None: a resume that runs nothing, which adds none)."""
     check_prepare(out, options, resume)
     run_file = safe_path(out, RUN_FILE)
     if not run_file.is_file() or _unstarted(out):
         write_json(run_file, dict(options, provenance=[environment]))
+        return
+    if environment is None:  # (a resume that runs nothing adds no environment)
         return
     recorded = json.loads(run_file.read_text(encoding="utf-8"))  # (an object: check_prepare)
     made = recorded.get("provenance") or []

@@ -54,6 +54,8 @@ from robofollow.eval.running.run_folder import (
     EvalRunError,
     ResultsFile,
     check_out,
+    check_prepare,
+    check_whole,
     drop_corrupt_lines,
     prepare,
     read_results,
@@ -370,13 +372,16 @@ def evaluate(compiled: Episodes, out: Path, options: EvalOptions, workers: int =
         raise EvalRunError("the options' spec digest or release is not the benchmark's")
     check_out(out)
     with run_lock(out):
-        prepare(out, options.to_json(), resume, environment(is_trained(options.policy)))
+        check_prepare(out, options.to_json(), resume)
+        check_whole(out)
         episodes = [e for e in select_episodes(compiled, options)
                     if up_to_round is None or e.round <= up_to_round]
         results_path = safe_path(out, RESULTS)
         finished = (drop_corrupt_lines if drop_corrupt else read_results)(results_path)
         done = {r["episode"] for r in finished}
         todo = [e for e in episodes if e.id not in done]
+        prepare(out, options.to_json(), resume,  # (what runs nothing adds no environment)
+                environment(is_trained(options.policy)) if todo else None)
         if not todo and run_finished(out):  # a finished run is read, never written again
             print(f"{out}: every episode is already recorded; nothing to run", file=sys.stderr)
             return summary(with_motion(finished, {e.id: e.motion for e in episodes}), options)

@@ -21,6 +21,7 @@ from robofollow.compiler.scene.spec import LEVELS
 from robofollow.errors import RoboFollowError, did_you_mean
 from robofollow.eval.running.modes import INSTRUCTION_MODES, VIDEO_MODES
 from robofollow.eval.running.run_folder import (
+    MAX_JSON_BYTES,
     RESULTS,
     RUN_FILE,
     SCORES,
@@ -39,8 +40,6 @@ from robofollow.files import key_problem, read_json_file, shown
 from robofollow.provenance import FIELDS as PROVENANCE_FIELDS
 from robofollow.provenance import NOTE
 
-MAX_JSON_BYTES = 16 * 1024 * 1024  # run.json and summary.json: the shipped ones are under 1 KB
-#   and 10 KB; a run that lists every task of the benchmark (--tasks) stays under 100 KB
 PROVENANCE = "provenance"  # what run.json records beside the options: the environments
 _OPTIONS = fields(EvalOptions)
 _REQUIRED = tuple(f.name for f in _OPTIONS
