@@ -222,3 +222,22 @@ def test_a_report_says_which_declared_control_arm_is_missing(tmp_path, capsys):
     assert main(["report", str(run)]) == 0
     err = capsys.readouterr().err
     assert "declares the control arm(s) empty, which" in err and "lacks" in err
+
+
+@pytest.mark.parametrize("linked", ["controls", "controls/empty"])
+def test_a_control_arm_behind_a_link_is_neither_written_nor_read(tmp_path, capsys, linked):
+    """RUN/controls or RUN/controls/empty a link elsewhere: a resume refuses before writing
+    (it wrote a whole arm outside the run), and report refuses to read it."""
+    run = tmp_path / "run"
+    assert main(["eval", *RUN, "--controls", "empty", "--shard", "1/2", "--out", str(run)]) == 0
+    outside = tmp_path / "outside"
+    shutil.move(str(run / linked), str(outside))
+    (run / linked).symlink_to(outside, target_is_directory=True)
+    before = _files(outside)
+    capsys.readouterr()
+    assert main(["eval", *RUN, "--controls", "empty", "--shard", "1/2", "--out", str(run),
+                 "--resume"]) == 1
+    assert "is a symbolic link" in capsys.readouterr().err
+    assert main(["report", str(run)]) == 1
+    assert "is a symbolic link" in capsys.readouterr().err
+    assert _files(outside) == before

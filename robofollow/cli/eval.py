@@ -125,7 +125,7 @@ def cmd_eval(args) -> int:
     from robofollow.eval.reports.comparison import control_comparisons
     from robofollow.eval.reports.report import write_report
     from robofollow.eval.reports.tables import table_text
-    from robofollow.eval.running.run_folder import CONTROLS, check_prepare
+    from robofollow.eval.running.run_folder import CONTROLS, check_prepare, safe_path
     from robofollow.eval.running.runner import (
         EvalOptions,
         evaluate,
@@ -167,7 +167,7 @@ def cmd_eval(args) -> int:
                           else None if is_server(args.policy) else DEFAULT_POLICY_TIMEOUT,
                           args.shard, tuple(controls), **source)
     arms = [(Path(args.out), options)] + [
-        (Path(args.out) / CONTROLS / mode, options.arm(mode)) for mode in controls]
+        (safe_path(Path(args.out), CONTROLS, mode), options.arm(mode)) for mode in controls]
     if args.tasks is None:
         for out, arm in arms:
             check_prepare(out, arm.to_json(), args.resume)

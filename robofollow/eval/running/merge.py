@@ -112,7 +112,7 @@ def merge(benchmark: Episodes, shards: list[Path], out: Path) -> tuple[dict, lis
         arm = _whole(arm_shards, arm_loaded, len(episodes))
         if arm != options.arm(mode):
             raise MergeError(f"{arm_shards[0]} is not the {mode} control arm of the shards' run")
-        arms.append((out / CONTROLS / mode, arm_shards, arm_loaded, arm))
+        arms.append((safe_path(out, CONTROLS, mode), arm_shards, arm_loaded, arm))
     joined = [(arm_out, arm_shards, arm_options, *_joined(episodes, arm_loaded, arm_out))
               for arm_out, arm_shards, arm_loaded, arm_options in arms]
     for arm_out, *_ in joined:

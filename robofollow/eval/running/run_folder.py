@@ -389,7 +389,11 @@ CONTROLS = "controls"  # RUN/controls/<instruction mode>: a run's control arms
 
 
 def control_arms(run: Path) -> list[str]:
-    """The modes of the run's control arms (RUN/controls/<mode> holding a run), sorted."""
-    folder = run / CONTROLS
+    """The modes of the run's control arms (RUN/controls/<mode> holding a run), sorted;
+    EvalOutputError where RUN/controls or an arm is a symbolic link (a run's arms live
+    inside it: nothing is read or written through a link)."""
+    folder = safe_path(run, CONTROLS)
+    if not folder.is_dir():
+        return []
     return sorted(arm.name for arm in folder.iterdir()
-                  if (arm / RUN_FILE).is_file()) if folder.is_dir() else []
+                  if (safe_path(run, CONTROLS, arm.name) / RUN_FILE).is_file())
