@@ -236,3 +236,22 @@ def test_eval_videos_of_l3_episodes_are_captioned_and_shown_beside_their_cell(tm
     assert frames[0][-CAPTION_HEIGHT:].mean() < frames[0][:240].mean()  # the dark band
     page = (out / "report.html").read_text()
     assert f'<video src="videos/{video.name}"' in page and "<h3>scene2 L3</h3>" in page
+
+
+def test_report_md_carries_no_markup_from_a_run_or_its_policy(tmp_path):
+    """A folder name, a policy name and a policy's error are outside text: report.md shows
+    them on their line, with no tag a markdown renderer would read and no code span they
+    can close early."""
+    options = replace(OPTIONS, policy="mine:make`<img src=x onerror=alert(1)>")
+    records = [dict(r, error="step 3: <script>alert(2)</script>\nforged line")
+               for r in _records("L0", 2, 0.0, 0.25)]
+    run = _folder(tmp_path / "<b>run\n# forged heading", records, options)
+    write_report(run)
+    text = (run / "report.md").read_text()
+    span = "``mine:make`<img src=x onerror=alert(1)>``"  # (a code span shows it as text)
+    assert f"Policy {span}," in text
+    outside = text.replace(span, "")
+    assert "<img" not in outside and "<script" not in outside and "<b>" not in outside
+    assert "\n# forged heading" not in text and "\nforged line" not in text
+    assert "# RoboFollow evaluation: &lt;b&gt;run # forged heading" in text
+    assert "- &lt;script&gt;alert(2)&lt;/script&gt; forged line (2)" in text

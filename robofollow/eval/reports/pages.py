@@ -3,7 +3,7 @@ formats their tables share.
 
 Every HTML template (`*.html.j2`) escapes what it shows: run records hold text from policies
 and policy servers (error messages), which must never become markup. No template marks a
-value |safe."""
+value |safe. The markdown templates pass such text through md_text or md_code."""
 
 from __future__ import annotations
 
@@ -46,8 +46,28 @@ def shade(value: float) -> str:
     return f"rgb({light}, 255, {light})" if value > 0 else "#fff"
 
 
+def md_text(value) -> str:
+    """Outside text (a run's folder name, a policy's error, a path) as one line of markdown
+    that carries no markup: line breaks become spaces, and < and > entities, so no renderer
+    reads a tag into it."""
+    text = " ".join(str(value).splitlines())
+    return text.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+
+
+def md_code(value) -> str:
+    """Outside text as a markdown code span, fenced with more backticks than it holds (so it
+    cannot close the span early) and on one line."""
+    text = " ".join(str(value).splitlines())
+    longest = max((len(run) for run in text.replace("`", " ` ").split() if set(run) == {"`"}),
+                  default=0)
+    fence = "`" * (longest + 1)
+    padded = f" {text} " if text.startswith("`") or text.endswith("`") else text
+    return f"{fence}{padded}{fence}"
+
+
 PAGES.globals.update(interval=interval, signed_interval=signed_interval, p_value=p_value,
                      rounds_of=rounds_of, shade=shade)
+PAGES.filters.update(md_text=md_text, md_code=md_code)
 
 
 def signed(value: float) -> str:
