@@ -255,3 +255,25 @@ def test_report_md_carries_no_markup_from_a_run_or_its_policy(tmp_path):
     assert "\n# forged heading" not in text and "\nforged line" not in text
     assert "# RoboFollow evaluation: &lt;b&gt;run # forged heading" in text
     assert "- &lt;script&gt;alert(2)&lt;/script&gt; forged line (2)" in text
+
+
+def test_a_report_rebuild_cut_short_leaves_every_figure_whole(tmp_path, monkeypatch):
+    """A rebuild killed while a figure is written (here: the drawing dies part-way, after its
+    output was opened) leaves the previous figures as they were, none empty."""
+    from matplotlib.figure import Figure
+
+    copy = tmp_path / "scene2-text"
+    shutil.copytree(SHIPPED / "scene2-text", copy)
+    before = {p.name: p.read_bytes() for p in (copy / "figures").iterdir()}
+
+    def dying(self, target, **options):
+        if isinstance(target, (str, Path)):
+            open(target, "wb").close()  # (as far as a kill after open would get)
+        else:
+            target.write(b"<svg")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(Figure, "savefig", dying)
+    with pytest.raises(KeyboardInterrupt):
+        write_report(copy)
+    assert {p.name: p.read_bytes() for p in (copy / "figures").iterdir()} == before

@@ -7,12 +7,14 @@ the drop from L0 per scene; Intent minus chance as a diverging heatmap; Intent p
 
 from __future__ import annotations
 
+import io
 from pathlib import Path
 
 import numpy as np
 
 from robofollow.eval.running.run_folder import safe_path
 from robofollow.eval.statistics.metrics import shown_interval
+from robofollow.files import write_bytes_atomic
 
 FIGURES = "figures"  # the folder beside the report
 INSTALL = "pip install 'robofollow[figures]'"
@@ -38,10 +40,14 @@ def _figure(width: float, height: float):
 
 
 def _save(figure, folder: Path, name: str, caption: str) -> dict:
+    """The figure as SVG and PDF, each drawn in memory and written whole (write_bytes_atomic):
+    a kill mid-write leaves the previous file, never an empty or cut one."""
     out = safe_path(folder, FIGURES)
     out.mkdir(parents=True, exist_ok=True)
     for suffix, metadata in (("svg", {"Date": None}), ("pdf", {"CreationDate": None})):
-        figure.savefig(safe_path(folder, FIGURES, f"{name}.{suffix}"), metadata=metadata)
+        drawn = io.BytesIO()
+        figure.savefig(drawn, format=suffix, metadata=metadata)
+        write_bytes_atomic(safe_path(folder, FIGURES, f"{name}.{suffix}"), drawn.getvalue())
     return {"name": name, "svg": f"{FIGURES}/{name}.svg", "pdf": f"{FIGURES}/{name}.pdf",
             "caption": caption}
 
