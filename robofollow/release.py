@@ -151,9 +151,9 @@ def benchmark(name: str | None = None, specs: Path | None = None) -> Episodes:
     return load(name or CURRENT)
 
 
-def release_data(compiled: Compiled) -> bytes:
-    """A compiled benchmark as a release holds it (benchmark.jsonl, uncompressed)."""
-    episodes = of(compiled)
+def release_data(compiled: Compiled, episodes: Episodes) -> bytes:
+    """A compiled benchmark as a release holds it (benchmark.jsonl, uncompressed), from its
+    episodes as `compiled_cache.of` gives them."""
     head = {"scenes": {s: scene.model_dump(mode="json")
                        for s, scene in compiled.spec.scenes.items()},
             "training": {label: b.model_dump(mode="json")
@@ -162,14 +162,14 @@ def release_data(compiled: Compiled) -> bytes:
     return json.dumps(head).encode() + b"\n" + b"".join(line + b"\n" for line in episodes.lines)
 
 
-def _per_level(ids: list[str], scene: str) -> dict[str, int]:
+def _per_level(ids: tuple[str, ...], scene: str) -> dict[str, int]:
     levels = [episode.split("/", 2)[1] for episode in ids if episode.split("/", 1)[0] == scene]
     return {level: levels.count(level) for level in LEVELS}
 
 
-def release_manifest(compiled: Compiled, name: str, data: bytes) -> Manifest:
-    """The manifest of `compiled` frozen as release `name` with these data."""
-    ids = list(of(compiled).ids)
+def release_manifest(compiled: Compiled, name: str, data: bytes,
+                     ids: tuple[str, ...]) -> Manifest:
+    """The manifest of `compiled` frozen as release `name` with these data and episode ids."""
     scenes = {scene: SceneEntry(split=digest,
                                 tasks={level: len(compiled.splits.of(scene, level))
                                        for level in LEVELS},
@@ -203,8 +203,9 @@ def freeze(compiled: Compiled, name: str, folder: Path | None = None) -> Manifes
     """Freeze a compiled benchmark as release `name` (a new folder in `folder`, by default the
     package's releases); ReleaseError as `check_new` says."""
     target = check_new(name, folder)
-    data = release_data(compiled)
-    found = release_manifest(compiled, name, data)
+    episodes = of(compiled)  # (every episode's record, built once)
+    data = release_data(compiled, episodes)
+    found = release_manifest(compiled, name, data, episodes.ids)
     target.mkdir(parents=True)
     write_bytes_atomic(target / DATA, gzip.compress(data, compresslevel=9, mtime=0))
     write_json_atomic(target / MANIFEST, found.model_dump(mode="json"))

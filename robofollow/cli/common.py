@@ -41,6 +41,16 @@ def benchmark_of(args):
     return release.benchmark(args.release)
 
 
+def run_benchmark_of(run: Path, args, options=None):
+    """The benchmark a command reads for `run`: its own release (or working compile), or
+    --specs's (`options`: the run's, where already read)."""
+    from robofollow.eval.running.run_benchmark import run_benchmark
+    from robofollow.eval.running.saved_run import load_options
+
+    return run_benchmark(run, options or load_options(run), args.release,
+                         Path(args.specs) if args.specs is not None else None)
+
+
 def specs_of(args) -> Path:
     """The specs a command reads: as given; else ./specs when the current folder has one;
     else the benchmark's own, installed with the package. Said on stderr when not given."""

@@ -17,6 +17,7 @@ from robofollow.cli.common import (
     interrupted,
     points,
     positive,
+    run_benchmark_of,
     seconds,
 )
 from robofollow.compiler.scene.spec import LEVELS, MOTION_LEVELS, ROUNDS
@@ -368,22 +369,13 @@ def add_merge(commands) -> None:
     p.set_defaults(handler=cmd_merge)
 
 
-def _run_benchmark(run: Path, args):
-    """The benchmark of a run: its own release (or working compile), or --specs's."""
-    from robofollow.eval.running.run_benchmark import run_benchmark
-    from robofollow.eval.running.saved_run import load_options
-
-    return run_benchmark(run, load_options(run), args.release,
-                         Path(args.specs) if args.specs is not None else None)
-
-
 def cmd_merge(args) -> int:
     from robofollow.eval.reports.report import write_report
     from robofollow.eval.reports.tables import table_text
     from robofollow.eval.running.merge import merge
 
     shards = [Path(s) for s in args.shards]
-    result, folders = merge(_run_benchmark(shards[0], args), shards, Path(args.out))
+    result, folders = merge(run_benchmark_of(shards[0], args), shards, Path(args.out))
     for folder in folders:
         write_report(folder)
     print(f"merged {len(args.shards)} shards into {args.out} ({result['episodes']} episodes):")
@@ -483,7 +475,7 @@ def _motions(run: Path, args) -> dict[str, str | None]:
     if not missing:
         return {}
     try:
-        episodes = _run_benchmark(run, args)
+        episodes = run_benchmark_of(run, args, options)
     except RoboFollowError as error:
         print(f"{run}: {len(missing)} L1/L3 records do not say whether their task's motion "
               f"moved, and its benchmark is not here ({error.render().splitlines()[0]}): "

@@ -6,7 +6,7 @@ import argparse
 import sys
 from pathlib import Path
 
-from robofollow.cli.common import benchmark_options, positive
+from robofollow.cli.common import benchmark_options, positive, run_benchmark_of
 
 
 def add_reproduce(commands) -> None:
@@ -46,7 +46,7 @@ def cmd_reproduce(args) -> int:
     from robofollow.errors import RoboFollowError, UsageError
     from robofollow.eval.policies.loading import check_policy
     from robofollow.eval.running.reproduce import DEFAULT_EPISODES, reproduce, stand_in
-    from robofollow.eval.running.run_benchmark import described, run_benchmark
+    from robofollow.eval.running.run_benchmark import described
     from robofollow.eval.running.saved_run import load_options
 
     if args.episode and args.episodes:
@@ -65,8 +65,7 @@ def cmd_reproduce(args) -> int:
         raise UsageError(f"the run was made with --policy {options.policy!r}, which is not "
                          f"here ({error.render()}); --policy re-runs its episodes with "
                          "another (e.g. baseline:NAME)") from None
-    benchmark = run_benchmark(run, options, args.release,
-                              Path(args.specs) if args.specs is not None else None)
+    benchmark = run_benchmark_of(run, args, options)
     print(f"benchmark: {described(options)}", file=sys.stderr)
     found = reproduce(benchmark, run, args.episodes or DEFAULT_EPISODES, policy, args.workers,
                       args.episode)

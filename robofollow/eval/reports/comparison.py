@@ -21,6 +21,7 @@ from robofollow.errors import RoboFollowError
 from robofollow.eval.reports.pages import p_value, signed, signed_interval
 from robofollow.eval.running.run_benchmark import described, run_benchmark, run_release
 from robofollow.eval.running.run_folder import CONTROLS, RUN_FILE, control_arms
+from robofollow.eval.running.runner import EvalOptions
 from robofollow.eval.running.saved_run import (
     RunReadError,
     load_options,
@@ -57,12 +58,9 @@ def run_scores(run: Path, hashes: dict[str, str] | None = None) -> list[dict]:
              "complete": bool(r["complete"])} for r in records]
 
 
-def _test_set(run: Path) -> tuple[str, str] | None:
+def _test_set(options: EvalOptions) -> tuple[str, str]:
     """What a run's episodes come from: ("release", name), or ("specs", spec digest) for a
-    working compile or specs no release was frozen from; None for a folder of scores alone."""
-    if not (run / RUN_FILE).is_file():
-        return None
-    options = load_options(run)
+    working compile or specs no release was frozen from."""
     name = run_release(options)
     return ("release", name) if name else ("specs", options.spec_digest)
 
@@ -72,13 +70,15 @@ def test_set_hashes(runs: list[Path]) -> list[dict[str, str]] | None:
     episode hashes); else, for each run, every episode's hash over what decides it, from its
     own release or working compile (release.content_hashes), so that only the episodes that
     are the same in both pair."""
-    sets = [_test_set(run) for run in runs]
-    if None in sets or len(set(sets)) == 1:
+    if not all((run / RUN_FILE).is_file() for run in runs):  # (folders of scores alone)
+        return None
+    options = [load_options(run) for run in runs]
+    if len({_test_set(o) for o in options}) == 1:
         return None
     hashes = []
-    for run in runs:
+    for run, made in zip(runs, options, strict=True):
         try:
-            benchmark = run_benchmark(run, load_options(run))
+            benchmark = run_benchmark(run, made)
         except RoboFollowError as error:
             raise CompareError(f"{run} was made on another test set than {runs[0]}, and its "
                                f"own is not here to pair them: {error.render()}") from None

@@ -11,6 +11,7 @@ from robofollow import release
 from robofollow.errors import counted
 from robofollow.eval.running.run_benchmark import run_release
 from robofollow.eval.running.run_folder import RUN_FILE
+from robofollow.eval.running.runner import EvalOptions
 from robofollow.eval.running.saved_run import load_options, summarised_episodes
 
 
@@ -19,10 +20,10 @@ def runs_under(folder: Path) -> list[Path]:
     return sorted(path.parent for path in folder.rglob(RUN_FILE) if path.is_file())
 
 
-def state(run: Path) -> tuple[str, str]:
-    """(the run's benchmark, its state): ("v1", "current"), ("v1", "on v1, to redo") or
-    ("working compile", "not a release: to redo on one")."""
-    name = run_release(load_options(run))
+def state(options: EvalOptions) -> tuple[str, str]:
+    """(the run's benchmark, its state) from its options: ("v1", "current"), ("v1", "on v1,
+    to redo") or ("working compile", "not a release: to redo on one")."""
+    name = run_release(options)
     if name is None:
         return "working compile", "not a release: to redo on one"
     return name, "current" if name == release.CURRENT else f"on {name}, to redo"
@@ -34,7 +35,7 @@ def state_rows(folder: Path) -> list[dict]:
     rows = []
     for run in runs_under(folder):
         options = load_options(run)
-        made_on, now = state(run)
+        made_on, now = state(options)
         rows.append({"run": run.relative_to(folder).as_posix(), "policy": options.policy,
                      "instructions": options.instruction_mode,
                      "episodes": summarised_episodes(run), "release": made_on, "state": now})
