@@ -7,6 +7,7 @@ import json
 import math
 import os
 import shutil
+import stat
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from functools import cache
@@ -167,15 +168,53 @@ def read_at_most(stream: BinaryIO, limit: int) -> bytes | None:
     return data if len(data) <= limit else None
 
 
+def not_regular(mode: int) -> str | None:
+    """Why a file of this st_mode is not read as data ("a folder", "a FIFO, socket or device"),
+    or None for a regular file."""
+    if stat.S_ISREG(mode):
+        return None
+    return "a folder, not a file" if stat.S_ISDIR(mode) else (
+        "not a regular file (a FIFO, socket or device); it is not read")
+
+
+def file_problem(path: Path, limit: int) -> str | None:
+    """Why a file (its links followed) is not read as data of at most `limit` bytes: it cannot
+    be looked at, is not a regular file (not_regular), or is larger; None when it may be read.
+    For readers that hand the path on (np.load); the others use read_file_at_most."""
+    try:
+        info = os.stat(path)
+    except OSError as error:
+        return f"cannot be read ({error.strerror or error})"
+    return not_regular(info.st_mode) or _size_problem(info.st_size, limit)
+
+
+def _size_problem(size: int, limit: int) -> str | None:
+    return f"larger than {_size(limit)}" if size > limit else None
+
+
+def _size(limit: int) -> str:
+    return f"{limit >> 20} MiB" if limit >= 1 << 20 else f"{limit} bytes"
+
+
 def read_file_at_most(path: Path, limit: int) -> tuple[bytes | None, str | None]:
     """(the file's bytes, None), or (None, why not: "cannot be read (...)", "larger than
-    16 MiB")."""
+    16 MiB", not_regular's reasons). Opened without blocking (a FIFO never hangs) and checked
+    once open; at most limit + 1 bytes are read (a file that grows, or a link to /dev/zero,
+    cannot fill the memory)."""
     try:
-        with open(path, "rb") as stream:
-            data = read_at_most(stream, limit)
+        descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
     except OSError as error:
         return None, f"cannot be read ({error.strerror or error})"
-    return (data, None) if data is not None else (None, f"larger than {limit >> 20} MiB")
+    try:
+        with os.fdopen(descriptor, "rb") as stream:
+            info = os.fstat(descriptor)
+            problem = not_regular(info.st_mode) or _size_problem(info.st_size, limit)
+            data = None if problem else read_at_most(stream, limit)
+    except OSError as error:
+        return None, f"cannot be read ({error.strerror or error})"
+    if problem:
+        return None, problem
+    return (data, None) if data is not None else (None, f"larger than {_size(limit)}")
 
 
 def read_json_file(path: Path, limit: int) -> tuple[Any, str | None]:

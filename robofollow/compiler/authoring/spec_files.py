@@ -14,7 +14,7 @@ from pathlib import Path
 
 from robofollow.compiler.scene.spec import MAX_SPEC_BYTES, Source
 from robofollow.errors import SpecError
-from robofollow.files import not_utf8
+from robofollow.files import not_regular, not_utf8, read_file_at_most
 
 SPEC_SUFFIX = ".rf"
 
@@ -70,8 +70,8 @@ def _why_not_read(path: Path, folder: Path | None) -> str | None:
         return f"cannot read it: {error.strerror or error}"
     if stat.S_ISDIR(info.st_mode):
         return "a folder, not a spec file"
-    if not stat.S_ISREG(info.st_mode):
-        return "not a regular file (a FIFO, socket or device); it is not read"
+    if not_regular(info.st_mode):
+        return not_regular(info.st_mode)
     if info.st_size > MAX_SPEC_BYTES:
         return (f"{info.st_size} bytes, more than a spec file may hold ({MAX_SPEC_BYTES} "
                 "bytes)")
@@ -79,15 +79,11 @@ def _why_not_read(path: Path, folder: Path | None) -> str | None:
 
 
 def _read(path: Path | str) -> bytes:
-    """The bytes of a regular file; opened without blocking, and checked again once open (the
-    file may have been replaced since it was looked at)."""
-    descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
-    with os.fdopen(descriptor, "rb") as source:
-        if not stat.S_ISREG(os.fstat(descriptor).st_mode):
-            raise OSError(f"{path} is not a regular file")
-        data = source.read(MAX_SPEC_BYTES + 1)
-    if len(data) > MAX_SPEC_BYTES:
-        raise OSError(f"more than a spec file may hold ({MAX_SPEC_BYTES} bytes)")
+    """The bytes of a regular file (files.read_file_at_most: opened without blocking, and
+    checked again once open, as the file may have been replaced since it was looked at)."""
+    data, problem = read_file_at_most(Path(path), MAX_SPEC_BYTES)
+    if problem:
+        raise OSError(f"{path}: {problem}")
     return data
 
 
