@@ -72,9 +72,14 @@ def write_bytes_atomic(path: Path, data: bytes) -> None:
         raise
 
 
+def json_bytes(data) -> bytes:
+    """A JSON file's bytes, as write_json writes them."""
+    return (json.dumps(data, indent=2) + "\n").encode()
+
+
 def write_json_atomic(path: Path, data) -> None:
     """JSON written atomically (write_bytes_atomic), as write_json writes it."""
-    write_bytes_atomic(path, (json.dumps(data, indent=2) + "\n").encode())
+    write_bytes_atomic(path, json_bytes(data))
 
 
 def link_or_copy(source: Path, target: Path) -> None:

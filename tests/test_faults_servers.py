@@ -1,7 +1,7 @@
 """Fault injection for the policy servers and clients, and the reports they feed: hostile
 servers (garbage, oversize replies, silence, lost connections, bad metadata, a non-HTTP
 handshake, invalid actions), hostile clients against `robofollow serve`'s servers (oversize,
-idle and malformed requests), the default bind address, HTML escaping in report.html, and
+idle and malformed requests, clients that drop at once), the default bind address, HTML escaping in report.html, and
 privileged observations sent only with --allow-privileged and recorded then.
 
 Every wait has a time limit (socket time-outs, subprocess and event waits), so a hang fails
@@ -10,6 +10,7 @@ the test instead of stalling the suite."""
 from __future__ import annotations
 
 import json
+import logging
 import re
 import select
 import selectors
@@ -498,6 +499,91 @@ def test_an_idle_websocket_client_is_closed_and_does_not_block_another():
                 idle.recv(timeout=0)
             with pytest.raises(ConnectionClosed):
                 idle.recv(timeout=WAIT)
+
+
+def _drop(connection: socket.socket, how: str) -> None:
+    """Close `connection` at once, without a websocket close frame: "reset" (an RST, as a
+    killed client's machine sends) or "close" (a FIN)."""
+    if how == "reset":
+        connection.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, struct.pack("ii", 1, 0))
+    connection.close()
+
+
+def _handshaken(port: int) -> socket.socket:
+    """A raw connection to the websocket server at `port`, its handshake complete."""
+    connection = _client(port)
+    connection.sendall(b"GET / HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\n"
+                       b"Connection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+                       b"Sec-WebSocket-Version: 13\r\n\r\n")
+    head = b""
+    while b"\r\n\r\n" not in head:
+        chunk = connection.recv(4096)
+        assert chunk, head
+        head += chunk
+    assert head.startswith(b"HTTP/1.1 101 "), head
+    return connection
+
+
+def _at_most_a_line(records: list[logging.LogRecord]) -> None:
+    """What a dropped client may leave in a server's log: no traceback, and at most one line
+    besides websockets' own "connection open" and "connection closed" (INFO, for every
+    client)."""
+    lines = [r.getMessage() for r in records]
+    assert not any(r.exc_info and r.exc_info[0] for r in records), lines
+    assert len([r for r in records
+                if r.levelno >= logging.WARNING or r.name == "robofollow.serve"]) <= 1, lines
+
+
+class _LateWebsocketServer(PolicyServer):
+    """`robofollow serve`'s websocket server, its first connection handled only once
+    websockets has seen the client go (its reading thread has ended and closed the socket):
+    a client dropping right after the handshake, without the race."""
+
+    def __init__(self):
+        super().__init__(benchmark(), "noop")
+        self.first_handled = threading.Event()
+
+    def handle(self, connection) -> None:
+        if self.first_handled.is_set():
+            return super().handle(connection)
+        connection.recv_events_thread.join(WAIT)
+        try:
+            return super().handle(connection)
+        finally:
+            self.first_handled.set()
+
+
+@pytest.mark.parametrize("how", ["reset", "close"])
+def test_a_websocket_client_dropping_after_the_handshake_leaves_no_traceback(caplog, how):
+    caplog.set_level(logging.INFO)
+    server = _LateWebsocketServer()
+    with served(server) as port:
+        _drop(_handshaken(port), how)
+        assert server.first_handled.wait(WAIT)
+        policy = WebsocketPolicy(f"ws://127.0.0.1:{port}", timeout=WAIT)  # still serving
+        assert validate_actions(policy.act({"state": HOME, "instruction": "x"}))[0].shape == (
+            50, 14)
+        policy.close()
+    _at_most_a_line(caplog.records)  # (served() returns once every handler has ended)
+
+
+@pytest.mark.parametrize("sent", [b"", b"\x00\x00", _frame(_predict())[:40], _frame(_predict()),
+                                  b"GET /heal"],
+                         ids=["nothing", "half-a-header", "mid-message", "a-request", "mid-http"])
+@pytest.mark.parametrize("how", ["reset", "close"])
+def test_a_tcp_client_dropping_at_once_or_mid_message_leaves_no_traceback(caplog, how, sent):
+    caplog.set_level(logging.INFO)
+    server = TcpPolicyServer(benchmark(), "noop", ServerLimits(idle_timeout=WAIT))
+    with socket.create_server(("127.0.0.1", 0)) as listener:
+        client = socket.create_connection(listener.getsockname(), timeout=WAIT)
+        connection, peer = listener.accept()
+        client.sendall(sent)
+        _drop(client, how)
+        server.handle(connection, peer)  # returns once the connection is over
+    _at_most_a_line(caplog.records)
+    with served(server) as port, _client(port) as connection:  # still serving
+        connection.sendall(_frame({"cmd": "reset", "obs": None}))
+        assert "res" in _read(connection)
 
 
 # -- the default bind address ------------------------------------------------------------------

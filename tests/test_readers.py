@@ -17,8 +17,12 @@ import pytest
 
 from robofollow.errors import RoboFollowError
 from robofollow.eval.running import scores
-from robofollow.eval.running.run_folder import CorruptResultsError, read_results
-from robofollow.eval.running.saved_run import load_options, summarised_episodes
+from robofollow.eval.running.run_folder import (
+    CorruptResultsError,
+    read_results,
+    summarised_episodes,
+)
+from robofollow.eval.running.saved_run import load_options
 from robofollow.eval.running.scores import compact_records, read_scores
 from tests.cli_helpers import run as run_cli
 from tests.report_helpers import fake_record

@@ -6,7 +6,10 @@ counts are bounded by the episodes."""
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import signal
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -241,3 +244,158 @@ def test_a_control_arm_behind_a_link_is_neither_written_nor_read(tmp_path, capsy
     assert main(["report", str(run)]) == 1
     assert "is a symbolic link" in capsys.readouterr().err
     assert _files(outside) == before
+
+
+# -- every file a run keeps is read through a check (issue: hardening, second round) ----------
+
+def _paths(value, path=()):
+    """Every field path of a JSON value (object keys and list indices), outermost first."""
+    if isinstance(value, dict):
+        for key, item in value.items():
+            yield (*path, key)
+            yield from _paths(item, (*path, key))
+    elif isinstance(value, list):
+        for index, item in enumerate(value):
+            yield (*path, index)
+            yield from _paths(item, (*path, index))
+
+
+def _wrong(value):
+    """A value of another JSON type than `value`'s (text for a number, a list for text, ...)."""
+    if isinstance(value, bool):
+        return "yes"
+    if isinstance(value, int | float):
+        return "1"
+    if isinstance(value, str):
+        return [value]
+    return 7 if value is not None else {"x": 1}
+
+
+def _with_wrong(record: dict, path: tuple) -> dict:
+    changed = json.loads(json.dumps(record))
+    inner = changed
+    for key in path[:-1]:
+        inner = inner[key]
+    inner[path[-1]] = _wrong(inner[path[-1]])
+    return changed
+
+
+def test_every_field_of_an_episode_record_at_a_wrong_type_is_a_corrupt_line(finished):
+    from robofollow.eval.running.episode_record import record_problem
+
+    record = json.loads((finished / "episodes.jsonl").read_text().splitlines()[0])
+    assert record_problem(record) is None
+    paths = list(_paths(record))
+    assert len(paths) > 50
+    for path in paths:
+        problem = record_problem(_with_wrong(record, path))
+        assert problem and repr(path[0]) in problem, (path, problem)
+
+
+def _damaged(finished: Path, folder: Path, field: str) -> Path:
+    """A copy of the finished run whose first record holds `field` at a wrong type, and whose
+    summary is gone (an unfinished run: resume reads its records)."""
+    shutil.copytree(finished, folder)
+    lines = (folder / "episodes.jsonl").read_text().splitlines(keepends=True)
+    lines[0] = json.dumps(_with_wrong(json.loads(lines[0]), (field,))) + "\n"
+    (folder / "episodes.jsonl").write_text("".join(lines))
+    return folder
+
+
+def _one_line_error(capsys, *parts: str) -> str:
+    """The one error line a command printed (beside lines that say what it reads)."""
+    err = capsys.readouterr().err
+    errors = [line for line in err.splitlines() if line.startswith("error")]
+    assert "Traceback" not in err and len(errors) == 1, err
+    for part in parts:
+        assert part in errors[0], (part, err)
+    return errors[0]
+
+
+@pytest.mark.parametrize("field", ["hashes", "chance", "stages", "followed_intent",
+                                   "executed_behaviour", "observed", "clipped", "error",
+                                   "instruction"])
+def test_a_record_with_a_field_of_the_wrong_type_is_refused_by_report(finished, tmp_path,
+                                                                        capsys, field):
+    run = _damaged(finished, tmp_path / "run", field)
+    capsys.readouterr()
+    assert main(["report", str(run)]) == 1
+    _one_line_error(capsys, "1 corrupt line: line 1:", repr(field))
+
+
+def test_a_record_of_the_wrong_type_is_refused_by_every_command_that_reads_it(finished,
+                                                                              tmp_path, capsys):
+    run = _damaged(finished, tmp_path / "run", "hashes")
+    shard = tmp_path / "shard"
+    assert main(["eval", *RUN, "--shard", "1/1", "--out", str(shard)]) == 0
+    _damaged(shard, tmp_path / "bad-shard", "hashes")
+    capsys.readouterr()
+    commands = [["report", str(run)], ["compare", str(run), str(finished)],
+                ["eval", *RUN, "--out", str(run), "--resume"],
+                ["reproduce", str(run), "--episodes", "1"],
+                ["merge", str(tmp_path / "bad-shard"), "--out", str(tmp_path / "merged")]]
+    for argv in commands:
+        assert main(argv) == 1, argv
+        _one_line_error(capsys, "corrupt line", "'hashes'")
+    assert not (tmp_path / "merged").exists()
+
+
+def test_a_hard_linked_results_file_is_not_appended_to(finished, tmp_path, capsys):
+    run = tmp_path / "run"
+    shutil.copytree(finished, run)
+    (run / "summary.json").unlink()
+    lines = (run / "episodes.jsonl").read_bytes().split(b"\n")
+    (run / "episodes.jsonl").write_bytes(lines[0] + b"\n")
+    elsewhere = tmp_path / "elsewhere.jsonl"
+    os.link(run / "episodes.jsonl", elsewhere)
+    before = elsewhere.read_bytes()
+    capsys.readouterr()
+    assert main(["eval", *RUN, "--out", str(run), "--resume"]) == 1
+    _one_line_error(capsys, "hard-linked elsewhere (2 names)")
+    assert elsewhere.read_bytes() == before
+
+
+def test_an_out_folder_whose_name_is_not_utf8_is_refused_before_anything_runs(tmp_path,
+                                                                               capsys):
+    out = os.fsdecode(bytes(tmp_path) + b"/run\xff")
+    assert main(["eval", *RUN, "--out", out]) == 2
+    _one_line_error(capsys, "run\\xff (the out argument) is not UTF-8 text (byte 0xff)")
+    assert list(tmp_path.iterdir()) == []
+
+
+@contextmanager
+def _no_hang(seconds: int = 60):
+    def stop(*_):
+        raise TimeoutError(f"hung for {seconds} s")
+    previous = signal.signal(signal.SIGALRM, stop)
+    signal.alarm(seconds)
+    try:
+        yield
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, previous)
+
+
+@pytest.mark.parametrize("name", ["episodes.jsonl", "run.json"])
+@pytest.mark.parametrize("kind", ["oversized", "fifo", "/dev/zero"])
+def test_a_run_file_that_is_huge_a_fifo_or_a_device_is_refused_on_resume_and_report(
+        finished, tmp_path, capsys, name, kind):
+    run = tmp_path / "run"
+    shutil.copytree(finished, run)
+    (run / "summary.json").unlink()
+    path = run / name
+    path.unlink()
+    if kind == "oversized":
+        with open(path, "wb") as f:
+            f.truncate(300 * 1024 * 1024)  # (sparse: past the caps, on no disk)
+    elif kind == "fifo":
+        os.mkfifo(path)
+    else:
+        path.symlink_to("/dev/zero")
+    says = {"oversized": "larger than", "fifo": "not a regular file",
+            "/dev/zero": "not a regular file"}[kind]
+    capsys.readouterr()
+    with _no_hang():
+        for argv in (["eval", *RUN, "--out", str(run), "--resume"], ["report", str(run)]):
+            assert main(argv) in (1, 2), argv
+            _one_line_error(capsys, str(path), says)

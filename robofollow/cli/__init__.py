@@ -48,6 +48,7 @@ def parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
     try:
+        _check_text(args)
         return args.handler(args)
     except RoboFollowError as error:
         text = error.render()
@@ -58,3 +59,20 @@ def main(argv: list[str] | None = None) -> int:
     except BrokenPipeError:  # output piped into e.g. `head`, which stopped reading
         sys.stdout = open(os.devnull, "w")  # noqa: SIM115  (no flush error at exit)
         return 1
+
+
+def _check_text(args) -> None:
+    """UsageError, before anything runs, for an argument that is not UTF-8 text (a folder
+    name with a byte such as 0xff, which Python hands on as a lone surrogate): runs record
+    and their pages show the names they are given, as UTF-8."""
+    for name, value in vars(args).items():
+        for text in value if isinstance(value, list | tuple) else [value]:
+            if isinstance(text, str) and not text.isascii():
+                try:
+                    text.encode("utf-8")
+                except UnicodeEncodeError as error:
+                    byte = os.fsencode(text[error.start])[0]
+                    shown = os.fsencode(text).decode("utf-8", "backslashreplace")
+                    raise UsageError(f"{shown} (the {name} argument) is not UTF-8 text (byte "
+                                     f"0x{byte:02x}); RoboFollow records and shows the names "
+                                     "it is given as UTF-8: rename it") from None

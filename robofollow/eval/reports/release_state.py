@@ -10,9 +10,9 @@ from pathlib import Path
 from robofollow import release
 from robofollow.errors import counted
 from robofollow.eval.running.run_benchmark import run_release
-from robofollow.eval.running.run_folder import RUN_FILE
+from robofollow.eval.running.run_folder import RUN_FILE, summarised_episodes
 from robofollow.eval.running.runner import EvalOptions
-from robofollow.eval.running.saved_run import load_options, summarised_episodes
+from robofollow.eval.running.saved_run import load_options
 
 
 def runs_under(folder: Path) -> list[Path]:

@@ -40,6 +40,7 @@ from robofollow.eval.running.run_folder import (
     check_folder_out,
     control_arms,
     safe_path,
+    summarised_episodes,
     write_text_file,
 )
 from robofollow.eval.running.runner import EvalOptions, with_motion
@@ -48,7 +49,6 @@ from robofollow.eval.running.saved_run import (
     load_provenance,
     load_records,
     load_run,
-    summarised_episodes,
 )
 from robofollow.eval.statistics.metrics import METRICS, MOTIONS, table
 

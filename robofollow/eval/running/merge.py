@@ -6,6 +6,8 @@ missing, doubled or different. The merged run records every environment its shar
 
 from __future__ import annotations
 
+import os
+import shutil
 import sys
 from collections import Counter
 from dataclasses import replace
@@ -16,15 +18,16 @@ from robofollow.compiled_cache import Episodes
 from robofollow.errors import RoboFollowError, named
 from robofollow.eval.running.run_folder import (
     CONTROLS,
+    LOCK,
     RESULTS,
     RUN_FILE,
     SCORES,
     SUMMARY,
+    EvalOutputError,
     check_out,
     control_arms,
     run_lock,
     safe_path,
-    write_json,
 )
 from robofollow.eval.running.runner import (
     EvalOptions,
@@ -34,11 +37,13 @@ from robofollow.eval.running.runner import (
     with_motion,
 )
 from robofollow.eval.running.saved_run import load_provenance, load_run
-from robofollow.eval.running.scores import write_scores
+from robofollow.eval.running.scores import scores_bytes
 from robofollow.files import (
     differing_options,
+    json_bytes,
     json_line,
     json_value,
+    read_file_at_most,
     write_bytes_atomic,
 )
 from robofollow.provenance import differences
@@ -98,7 +103,10 @@ def _provenance(shards: list[Path]) -> list[dict]:
 def merge(benchmark: Episodes, shards: list[Path], out: Path) -> tuple[dict, list[Path]]:
     """Join the shards into the run folder `out` (new), and each of their control arms into
     out/controls/<mode>; returns the run's summary and the folders written, the run last (its
-    report reads its arms'). Everything is checked before anything is written."""
+    report reads its arms'). Everything is checked before anything is written, and the run is
+    written whole into the scratch folder .OUT.merging beside `out`, then moved there: a merge
+    stopped part-way leaves `out` as it was, and the same command finishes it (a folder that
+    holds this merge already is left as it is)."""
     loaded = [load_run(shard) for shard in shards]
     if loaded[0][0].spec_digest != benchmark.spec.digest:
         raise MergeError("the shards were run on other specs than these (--specs chooses the "
@@ -113,12 +121,21 @@ def merge(benchmark: Episodes, shards: list[Path], out: Path) -> tuple[dict, lis
         if arm != options.arm(mode):
             raise MergeError(f"{arm_shards[0]} is not the {mode} control arm of the shards' run")
         arms.append((safe_path(out, CONTROLS, mode), arm_shards, arm_loaded, arm))
-    joined = [(arm_out, arm_shards, arm_options, *_joined(episodes, arm_loaded, arm_out))
-              for arm_out, arm_shards, arm_loaded, arm_options in arms]
-    for arm_out, *_ in joined:
-        _check_new(arm_out)
-    results = [_write(*arm) for arm in joined]
-    return results[0], [arm_out for arm_out, *_ in joined[::-1]]
+    written = [(arm_out, *_contents(arm_shards, arm_options,
+                                    *_joined(episodes, arm_loaded, arm_out)))
+               for arm_out, arm_shards, arm_loaded, arm_options in arms]
+    if all(_holds(arm_out, files) for arm_out, files, _ in written):
+        print(f"{out} already holds this merge: nothing is written", file=sys.stderr)
+    else:
+        _check_new(out)
+        scratch = safe_path(out.parent, f".{out.name}.merging")
+        with run_lock(scratch):
+            _check_new(out)  # (again, held: another merge may have finished it meanwhile)
+            _clear(scratch)
+            for arm_out, files, _ in written:
+                _write(scratch / arm_out.relative_to(out), files)
+            _move(scratch, out)
+    return written[0][2], [arm_out for arm_out, *_ in written[::-1]]
 
 
 def _check_new(out: Path) -> None:
@@ -127,6 +144,30 @@ def _check_new(out: Path) -> None:
     if (out / RUN_FILE).exists():
         raise MergeError(f"{out} already holds a run; merge writes a new run: choose another "
                          "--out")
+
+
+def _clear(scratch: Path) -> None:
+    """Empty the scratch folder of a merge that was stopped part-way (its lock kept: held)."""
+    for entry in scratch.iterdir():
+        if entry.name == LOCK:
+            continue
+        if entry.is_dir() and not entry.is_symlink():
+            shutil.rmtree(entry)
+        else:
+            entry.unlink()
+
+
+def _move(scratch: Path, out: Path) -> None:
+    """The merged run, whole, into `out` (an empty folder there, with a lock of its own, is
+    replaced)."""
+    try:
+        if out.is_dir():
+            (out / LOCK).unlink(missing_ok=True)
+            out.rmdir()
+        os.rename(scratch, out)
+    except OSError as error:
+        raise EvalOutputError(f"cannot move the merged run from {scratch} to {out}: "
+                              f"{error.strerror or error}; merge again to finish") from None
 
 
 def _joined(episodes: list[Episode], loaded: list[tuple[EvalOptions, list[dict]]],
@@ -150,16 +191,29 @@ def _joined(episodes: list[Episode], loaded: list[tuple[EvalOptions, list[dict]]
     return records, {e.id: e.motion for e in episodes}
 
 
-def _write(out: Path, shards: list[Path], options: EvalOptions, records: list[dict],
-           motions: dict[str, str | None]) -> dict:
-    """One arm's run folder, from its joined records; returns its summary."""
-    with run_lock(out):
-        _check_new(out)
-        write_json(safe_path(out, RUN_FILE), dict(options.to_json(),
-                                                  provenance=_provenance(shards)))
-        write_bytes_atomic(safe_path(out, RESULTS),
-                           "".join(json_line(r) for r in records).encode())
-        result = summary(with_motion(records, motions), options)
-        write_json(safe_path(out, SUMMARY), result)
-        write_scores(safe_path(out, SCORES), records)
-    return result
+def _contents(shards: list[Path], options: EvalOptions, records: list[dict],
+              motions: dict[str, str | None]) -> tuple[dict[str, bytes], dict]:
+    """One arm's files, from its joined records, and its summary."""
+    result = summary(with_motion(records, motions), options)
+    files = {RUN_FILE: json_bytes(dict(options.to_json(), provenance=_provenance(shards))),
+             RESULTS: "".join(json_line(r) for r in records).encode(),
+             SUMMARY: json_bytes(result), SCORES: scores_bytes(records)}
+    return files, result
+
+
+def _holds(out: Path, files: dict[str, bytes]) -> bool:
+    """Whether a folder holds these files already (a merge stopped after it moved them in)."""
+    for name, data in files.items():
+        found, problem = read_file_at_most(out / name, len(data))
+        if problem or found != data:
+            return False
+    return True
+
+
+def _write(out: Path, files: dict[str, bytes]) -> None:
+    for name, data in files.items():
+        path = safe_path(out, name)
+        try:
+            write_bytes_atomic(path, data)
+        except OSError as error:
+            raise EvalOutputError(f"cannot write {path}: {error.strerror or error}") from None

@@ -6,8 +6,8 @@ from __future__ import annotations
 
 import errno
 import fcntl
-import json
 import os
+import stat
 import sys
 from collections.abc import Iterator
 from contextlib import contextmanager, suppress
@@ -15,11 +15,15 @@ from pathlib import Path
 
 from robofollow import release
 from robofollow.errors import RoboFollowError, UsageError
+from robofollow.eval.running.episode_record import record_problem
 from robofollow.files import (
     changed_options,
+    file_problem,
     json_line,
     json_lines,
+    read_file_at_most,
     read_json_file,
+    shown,
     write_bytes_atomic,
     write_json_atomic,
 )
@@ -29,12 +33,9 @@ RUN_FILE, RESULTS, SUMMARY, LOCK = "run.json", "episodes.jsonl", "summary.json",
 SCORES = "scores.csv.gz"  # the compact records a finished run keeps (scores.py)
 MAX_JSON_BYTES = 16 * 1024 * 1024  # run.json and summary.json: the shipped ones are under 1 KB
 #   and 10 KB; a run that lists every task of the benchmark (--tasks) stays under 100 KB
+MAX_RESULTS_BYTES = 256 * 1024 * 1024  # RUN/episodes.jsonl: a record takes about 1.6 KB, so a
+#   whole benchmark's round (6,350 episodes) about 10 MB; this holds some 25 rounds
 DROPPED = RESULTS + ".dropped"  # corrupt lines that --drop-corrupt moved out of RESULTS
-_RECORD_FIELDS = {"episode": str, "scene": str, "level": str, "task": str,
-                  "intent_score": (int, float), "execution_score": (int, float),
-                  "complete": bool}  # what the summary reads of every record; _record_problem
-#   checks them: Intent and Execution from 0 to 1, the episode id's shape (scores.py:
-#   episode_problem) and its task, scene and level those of the record
 
 
 class EvalRunError(RoboFollowError):
@@ -47,6 +48,26 @@ class EvalOutputError(EvalRunError):
 
 class RunInUseError(EvalRunError):
     """Another run holds the run folder."""
+
+
+class RunReadError(EvalRunError):
+    """A folder that holds no evaluation run, or not the part of one that is asked for, or a
+    file of it that is not as RoboFollow wrote it."""
+
+
+def json_type(value) -> str:
+    return {dict: "object", list: "array", str: "string", bool: "boolean",
+            type(None): "null"}.get(type(value), "number")
+
+
+def read_json_object(path: Path, what: str) -> dict:
+    """A file that holds one JSON object (`what` it is), read up to MAX_JSON_BYTES."""
+    value, problem = read_json_file(path, MAX_JSON_BYTES)
+    if problem:
+        raise RunReadError(f"{path}: {problem} ({what} expected)")
+    if not isinstance(value, dict):
+        raise RunReadError(f"{path}: a JSON {json_type(value)}, not an object ({what})")
+    return value
 
 
 class CorruptResultsError(EvalRunError):
@@ -67,47 +88,36 @@ RESUMABLE = ("; the finished episodes are kept: fix it and run the same command 
              "to continue")
 
 
-def _record_problem(record) -> str | None:
-    if not isinstance(record, dict):
-        return f"a JSON {type(record).__name__}, not an episode record"
-    for key, kind in _RECORD_FIELDS.items():
-        if key not in record:
-            return f"no {key!r}"
-        if not isinstance(record[key], kind) or (kind != bool and isinstance(record[key], bool)):
-            return f"{key!r} is {json.dumps(record[key])[:40]}"
-    # (imported here: the record's checks are the scores file's, scores.py)
-    from robofollow.eval.running.scores import episode_problem
-    from robofollow.files import number_problem, shown
-    for key in ("intent_score", "execution_score"):
-        problem = number_problem(record[key], 0.0, 1.0)
-        if problem:
-            return f"{key!r} {problem}"
-    problem = episode_problem(record["episode"])
+def present(path: Path) -> bool:
+    """Whether a file of the run is there: False where nothing is, True for a regular file (its
+    links followed), EvalRunError for anything else (a FIFO, a device, a folder, a dangling
+    link): a run's file that is not a file is never read, nor taken for an absent one."""
+    if not os.path.lexists(path):
+        return False
+    problem = file_problem(path, sys.maxsize)
     if problem:
-        return f"'episode' {problem}"
-    task = record["episode"].rpartition("#")[0]
-    for key, value in zip(("task", "scene", "level"), (task, *task.split("/")[:2]), strict=True):
-        if record[key] != value:
-            return (f"{key!r} is {shown(record[key])}, but the episode id "
-                    f"{shown(record['episode'])} says {shown(value)}")
-    return None
+        raise EvalRunError(f"{path}: {problem}")
+    return True
 
 
 def _scan(path: Path) -> tuple[list[dict], list[bytes], list[tuple[int, bytes, str]]]:
     """The whole records of a results file, their lines, and its corrupt lines (number, line,
     what is wrong). Lines end at "\\n" only; a last line cut short by a kill is removed from
-    the file."""
-    if not path.is_file():
+    the file. At most MAX_RESULTS_BYTES are read."""
+    if not present(path):
         return [], [], []
-    data = path.read_bytes()
+    data, problem = read_file_at_most(path, MAX_RESULTS_BYTES)
+    if problem:
+        raise EvalRunError(f"{path}: {problem} (an episode's record takes about 2 KB; "
+                           "a run this large is run in shards, eval --shard I/N)")
     whole = data[:data.rfind(b"\n") + 1]
     if len(whole) != len(data):
-        with open(path, "r+b") as f:
+        with open(safe_path(path.parent, path.name), "r+b") as f:
             f.truncate(len(whole))
     records, lines, corrupt, seen = [], [], [], {}
     for line in json_lines(whole):
         record = line.value
-        why = line.problem or _record_problem(record)
+        why = line.problem or record_problem(record)
         if why is None and record["episode"] in seen:
             why = f"repeats episode {record['episode']} of line {seen[record['episode']]}"
         if why is not None:
@@ -160,10 +170,16 @@ class ResultsFile:
     def __init__(self, path: Path):
         self.path = path
         try:
-            self.fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW,
-                              0o644)
+            self.fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW
+                              | os.O_NONBLOCK, 0o644)
         except OSError as error:
             raise EvalOutputError(f"cannot write {path}: {error.strerror or error}") from None
+        info = os.fstat(self.fd)
+        problem = (_linked_elsewhere(info) if stat.S_ISREG(info.st_mode)
+                   else "not a regular file (a FIFO, socket or device)")
+        if problem:
+            os.close(self.fd)
+            raise EvalOutputError(f"cannot write {path}: {problem}")
 
     def write(self, data: bytes) -> None:
         view = memoryview(data)
@@ -192,7 +208,9 @@ class ResultsFile:
 
 
 def _holds_files(out: Path) -> bool:
-    return out.is_dir() and any(p.name != LOCK for p in out.iterdir())
+    """Whether a folder holds files beyond the lock and a write a kill left unfinished."""
+    return out.is_dir() and any(p.name != LOCK and not p.name.endswith(".partial")
+                                for p in out.iterdir())
 
 
 def check_out(out: Path) -> None:
@@ -206,7 +224,7 @@ def check_out(out: Path) -> None:
             raise EvalOutputError(f"cannot create the run folder {out}: {existing} is a file")
         if not os.access(existing, os.W_OK | os.X_OK):
             raise EvalOutputError(f"cannot write in {existing}: permission denied")
-        if not (out / RUN_FILE).is_file() and _holds_files(out):
+        if not present(out / RUN_FILE) and _holds_files(out):
             raise EvalRunError(f"{out} is not empty and holds no run")
     except OSError as error:
         raise EvalOutputError(f"cannot use the run folder {out}: "
@@ -254,8 +272,8 @@ def _unstarted(out: Path) -> bool:
     mistyped command's): as good as empty. A folder that keeps a finished run's summary or
     scores (a shipped run) is not."""
     results = out / RESULTS
-    return ((out / RUN_FILE).is_file()
-            and (not results.is_file() or results.stat().st_size == 0)
+    return (present(out / RUN_FILE)
+            and (not present(results) or results.stat().st_size == 0)
             and not (out / SUMMARY).exists() and not (out / SCORES).exists())
 
 
@@ -273,13 +291,19 @@ def _lines(path: Path) -> int:
     return count
 
 
-def _summarised(out: Path) -> int | None:
-    """The episodes a run's summary counts (None: no summary, or one that does not say)."""
-    if not (out / SUMMARY).is_file():
+def summarised_episodes(run: Path) -> int | None:
+    """How many episodes the run's summary (RUN/summary.json) counts, if it has one (checked:
+    a JSON object whose `episodes` is a whole number from 0)."""
+    path = run / SUMMARY
+    if not path.is_file():
         return None
-    data, problem = read_json_file(out / SUMMARY, MAX_JSON_BYTES)
-    count = data.get("episodes") if isinstance(data, dict) and not problem else None
-    return count if isinstance(count, int) and not isinstance(count, bool) else None
+    summary = read_json_object(path, "a run's summary")
+    if "episodes" not in summary:
+        raise RunReadError(f"{path}: no \"episodes\"")
+    count = summary["episodes"]
+    if isinstance(count, bool) or not isinstance(count, int) or count < 0:
+        raise RunReadError(f"{path}: episodes is {shown(count)}, not a whole number from 0")
+    return count
 
 
 def check_whole(out: Path) -> None:
@@ -288,7 +312,7 @@ def check_whole(out: Path) -> None:
     over its scores. (Corrupt lines count: --drop-corrupt repairs those.)"""
     if not (finished(out) and (out / RESULTS).is_file()):
         return
-    kept, counted = _lines(out / RESULTS), _summarised(out)
+    kept, counted = _lines(out / RESULTS), summarised_episodes(out)
     if counted is not None and kept < counted:
         raise EvalRunError(f"{out} holds a finished run whose {RESULTS} keeps {kept} of the "
                            f"{counted} episodes its summary counts; it is not resumed (its "
@@ -301,22 +325,18 @@ def check_prepare(out: Path, options: dict, resume: bool) -> None:
     never resumed: its episodes could not be told from new ones."""
     check_out(out)
     run_file = out / RUN_FILE
-    if not run_file.is_file() or _unstarted(out):
+    if not present(run_file) or _unstarted(out):
         return
-    try:
-        previous = json.loads(run_file.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as error:
-        raise EvalRunError(f"{run_file} cannot be read: {error}") from None
+    previous = read_json_object(run_file, "a run's options")
     if not resume:
         raise EvalRunError(f"{out} already holds a run; pass --resume to continue it, or "
                            "choose another folder")
-    if not (out / RESULTS).is_file():
+    if not present(out / RESULTS):
         raise EvalRunError(f"{out} holds a finished run that keeps only its scores "
                            f"({SCORES}, no {RESULTS}); it cannot be resumed or written over: "
                            "choose another folder")
 
-    problem = changed_options(_named_release(previous) if isinstance(previous, dict) else {},
-                              _named_release(options))
+    problem = changed_options(_named_release(previous), _named_release(options))
     if problem:
         raise EvalRunError(f"{out} {problem}")
 
@@ -339,12 +359,12 @@ def prepare(out: Path, options: dict, resume: bool, environment: dict | None) ->
     provenance (`environment` None: a resume that runs nothing, which adds none)."""
     check_prepare(out, options, resume)
     run_file = safe_path(out, RUN_FILE)
-    if not run_file.is_file() or _unstarted(out):
+    if not present(run_file) or _unstarted(out):
         write_json(run_file, dict(options, provenance=[environment]))
         return
     if environment is None:  # (a resume that runs nothing adds no environment)
         return
-    recorded = json.loads(run_file.read_text(encoding="utf-8"))  # (an object: check_prepare)
+    recorded = read_json_object(run_file, "a run's options")
     made = recorded.get("provenance") or []
     if not (isinstance(made, list) and all(isinstance(entry, dict) for entry in made)):
         raise EvalRunError(f"{run_file}: provenance is not a list of objects")
@@ -373,8 +393,9 @@ def write_text_file(path: Path, text: str) -> None:
 
 
 def safe_path(out: Path, *parts: str) -> Path:
-    """out/parts, refused where it or a folder on the way below `out` is a symbolic link: no
-    write follows a link out of a run folder (or any --out)."""
+    """out/parts, refused where it or a folder on the way below `out` is a symbolic link, or
+    where it is a file hard-linked elsewhere (written in place, as a results file is appended
+    to, the other names would change too): no write leaves a run folder (or any --out)."""
     path = out
     for part in parts:
         path = path / part
@@ -382,7 +403,21 @@ def safe_path(out: Path, *parts: str) -> Path:
             raise EvalOutputError(f"{path} is a symbolic link; RoboFollow writes only inside "
                                   f"{out} and never through a link: remove it, or choose "
                                   "another folder")
+    try:
+        info = os.lstat(path)
+    except OSError:
+        return path  # (not there yet)
+    if parts and _linked_elsewhere(info):
+        raise EvalOutputError(f"{path}: {_linked_elsewhere(info)}")
     return path
+
+
+def _linked_elsewhere(info: os.stat_result) -> str | None:
+    """Why a file the run would write in place is not its own: it is hard-linked elsewhere."""
+    if stat.S_ISREG(info.st_mode) and info.st_nlink > 1:
+        return (f"a file hard-linked elsewhere ({info.st_nlink} names); RoboFollow writes "
+                "only files of its own: copy it, or choose another folder")
+    return None
 
 
 CONTROLS = "controls"  # RUN/controls/<instruction mode>: a run's control arms

@@ -21,11 +21,13 @@ from robofollow.compiler.scene.spec import LEVELS
 from robofollow.errors import RoboFollowError, did_you_mean
 from robofollow.eval.running.modes import INSTRUCTION_MODES, VIDEO_MODES
 from robofollow.eval.running.run_folder import (
-    MAX_JSON_BYTES,
     RESULTS,
     RUN_FILE,
     SCORES,
-    SUMMARY,
+    RunReadError,
+    json_type,
+    present,
+    read_json_object,
     read_results,
 )
 from robofollow.eval.running.runner import EvalOptions, shard_of
@@ -36,7 +38,7 @@ from robofollow.eval.running.scores import (
     read_scores,
     task_problem,
 )
-from robofollow.files import key_problem, read_json_file, shown
+from robofollow.files import key_problem, shown
 from robofollow.provenance import FIELDS as PROVENANCE_FIELDS
 from robofollow.provenance import NOTE
 
@@ -47,26 +49,6 @@ _REQUIRED = tuple(f.name for f in _OPTIONS
 _OPTIONAL = (*(f.name for f in _OPTIONS if f.name not in _REQUIRED), PROVENANCE)
 _ADAPTER = TypeAdapter(EvalOptions)
 _DIGEST = re.compile(r"[0-9a-f]{64}")  # a spec digest: sha256, in hex
-
-
-class RunReadError(RoboFollowError):
-    """A folder that holds no evaluation run, or not the part of one that is asked for, or a
-    file of it that is not as RoboFollow wrote it."""
-
-
-def _json_type(value) -> str:
-    return {dict: "object", list: "array", str: "string", bool: "boolean",
-            type(None): "null"}.get(type(value), "number")
-
-
-def _json_object(path: Path, what: str) -> dict:
-    """A file that holds one JSON object (`what` it is), read up to MAX_JSON_BYTES."""
-    value, problem = read_json_file(path, MAX_JSON_BYTES)
-    if problem:
-        raise RunReadError(f"{path}: {problem} ({what} expected)")
-    if not isinstance(value, dict):
-        raise RunReadError(f"{path}: a JSON {_json_type(value)}, not an object ({what})")
-    return value
 
 
 def _keys(path: Path, data: dict, required, optional, where: str = "") -> None:
@@ -155,11 +137,11 @@ def _provenance(path: Path, entries) -> list[dict]:
     """run.json's provenance: a list of objects whose keys are provenance.FIELDS (and NOTE)
     and whose values are strings or null."""
     if not isinstance(entries, list):
-        raise RunReadError(f"{path}: {PROVENANCE} is a JSON {_json_type(entries)}, not an array")
+        raise RunReadError(f"{path}: {PROVENANCE} is a JSON {json_type(entries)}, not an array")
     for index, entry in enumerate(entries):
         where = f"{PROVENANCE}[{index}]"
         if not isinstance(entry, dict):
-            raise RunReadError(f"{path}: {where} is a JSON {_json_type(entry)}, not an object")
+            raise RunReadError(f"{path}: {where} is a JSON {json_type(entry)}, not an object")
         _keys(path, entry, (), (*PROVENANCE_FIELDS, NOTE), f"{where}: ")
         for key, value in entry.items():
             if value is not None and not isinstance(value, str):
@@ -173,7 +155,7 @@ def read_run_file(run: Path) -> tuple[EvalOptions, list[dict]]:
     default optional, of their types and in range), and its provenance (empty where it records
     none)."""
     path = run / RUN_FILE
-    data = _json_object(path, "a run's options")
+    data = read_json_object(path, "a run's options")
     _keys(path, data, _REQUIRED, _OPTIONAL)
     provenance = _provenance(path, data[PROVENANCE]) if PROVENANCE in data else []
     options = _typed(path, {k: v for k, v in data.items() if k != PROVENANCE})
@@ -189,7 +171,7 @@ def read_run_file(run: Path) -> tuple[EvalOptions, list[dict]]:
 
 
 def load_options(run: Path) -> EvalOptions:
-    if not (run / RUN_FILE).is_file():
+    if not present(run / RUN_FILE):
         what = "no such folder" if not run.is_dir() else f"no {RUN_FILE}"
         raise RunReadError(f"{run} holds no evaluation run ({what})")
     return read_run_file(run)[0]
@@ -199,7 +181,7 @@ def load_provenance(run: Path) -> list[dict]:
     """The environments that ran the run (RUN/run.json's provenance: one entry per environment,
     provenance.FIELDS); empty where it records none, or keeps no run.json (a folder of scores
     only)."""
-    if not (run / RUN_FILE).is_file():
+    if not present(run / RUN_FILE):
         return []
     return read_run_file(run)[1]
 
@@ -208,9 +190,9 @@ def load_records(run: Path, reported: bool = False) -> list[dict]:
     """The run's episode records: full where it keeps them, else compact. `reported`: the
     records must hold what a report reads (a score file written before it kept that does
     not)."""
-    if (run / RESULTS).is_file():
+    if present(run / RESULTS):
         return read_results(run / RESULTS)
-    if (run / SCORES).is_file():
+    if present(run / SCORES):
         if reported and not holds_reported(run / SCORES):
             raise RunReadError(f"{run} keeps only {SCORES}, written before it kept what the "
                                "report shows; its report cannot be rebuilt")
@@ -226,18 +208,3 @@ def load_records(run: Path, reported: bool = False) -> list[dict]:
 def load_run(run: Path) -> tuple[EvalOptions, list[dict]]:
     """The run's options and the records a report reads."""
     return load_options(run), load_records(run, reported=True)
-
-
-def summarised_episodes(run: Path) -> int | None:
-    """How many episodes the run's summary (RUN/summary.json) counts, if it has one (checked:
-    a JSON object whose `episodes` is a whole number from 0)."""
-    path = run / SUMMARY
-    if not path.is_file():
-        return None
-    summary = _json_object(path, "a run's summary")
-    if "episodes" not in summary:
-        raise RunReadError(f"{path}: no \"episodes\"")
-    count = summary["episodes"]
-    if isinstance(count, bool) or not isinstance(count, int) or count < 0:
-        raise RunReadError(f"{path}: episodes is {shown(count)}, not a whole number from 0")
-    return count

@@ -28,6 +28,7 @@ from robofollow.files import (
     not_utf8,
     number_problem,
     read_at_most,
+    read_file_at_most,
     shown,
     write_bytes_atomic,
 )
@@ -70,12 +71,17 @@ def _number(value: float | None) -> str:
     return "" if value is None else f"{value:.6g}"
 
 
-def write_scores(path: Path, results: list[dict]) -> None:
+def scores_bytes(results: list[dict]) -> bytes:
+    """The scores file of these records, as write_scores writes it."""
     text = io.StringIO()
     writer = csv.DictWriter(text, COLUMNS, lineterminator="\n")
     writer.writeheader()
     writer.writerows(score_rows(results))
-    write_bytes_atomic(path, gzip.compress(text.getvalue().encode(), mtime=0))
+    return gzip.compress(text.getvalue().encode(), mtime=0)
+
+
+def write_scores(path: Path, results: list[dict]) -> None:
+    write_bytes_atomic(path, scores_bytes(results))
 
 
 MAX_UNPACKED = 64 * 1024 * 1024  # bytes a scores file may unpack to. The largest shipped one
@@ -154,8 +160,11 @@ _CHECKS = {"episode": episode_problem, "intent": _fraction, "execution": _fracti
 
 def _unpacked(path: Path) -> str:
     """The file's text, unpacked up to MAX_UNPACKED bytes."""
+    packed, problem = read_file_at_most(path, MAX_UNPACKED)
+    if problem:
+        raise ScoresFileError(f"{path}: {problem}")
     try:
-        with gzip.open(path, "rb") as stream:
+        with gzip.GzipFile(fileobj=io.BytesIO(packed)) as stream:
             data = read_at_most(stream, MAX_UNPACKED)
     except (OSError, EOFError, zlib.error) as error:
         raise ScoresFileError(f"{path}: not a scores file ({error_text(error)})") from None

@@ -13,7 +13,9 @@ A policy is reset when a connection takes it, when a RoboFollow client says an e
 and when an observation's "step" is 0 after the policy has acted (openpi's clients send no
 episode boundary: they may send "step", or open a connection per episode). Observations are
 checked against the layout the server declares in its metadata (`observation_layout`) and
-refused with an error reply that says what was expected; so are NaN and infinite numbers."""
+refused with an error reply that says what was expected; so are NaN, infinite numbers and
+numbers beyond MAX_OBSERVATION_MAGNITUDE. So are a policy's actions before they are sent: ones
+that are not finite float32 [T, 14] numbers get an error reply instead."""
 
 from __future__ import annotations
 
@@ -26,11 +28,17 @@ import numpy as np
 from robofollow.benchmark.episode import Benchmark
 from robofollow.errors import RoboFollowError
 from robofollow.eval.policies.loading import load_policy
-from robofollow.eval.policies.policy import ACTION_WIDTH, Privileged
+from robofollow.eval.policies.policy import (
+    ACTION_WIDTH,
+    BadActionError,
+    Privileged,
+    validate_actions,
+)
 from robofollow.eval.protocols.limits import (
     IDLE_TIMEOUT_S,
     MAX_CLIENTS,
     MAX_MESSAGE_BYTES,
+    MAX_OBSERVATION_MAGNITUDE,
 )
 from robofollow.eval.protocols.wire import server_text
 from robofollow.sim.cameras import CAMERA_NAMES, IMAGE_HEIGHT, IMAGE_WIDTH
@@ -118,17 +126,33 @@ def _checked_objects(objects, spec: str) -> np.ndarray:
             and objects.shape == SHAPE):
         raise RequestError(f"'objects' must be float32 {list(SHAPE)} (one row per body: "
                            f"{', '.join(FIELDS)}); got {_shape_text(objects)}")
-    return _finite(objects, "'objects'")
+    return _physical(objects, "'objects'")
 
 
-def _finite(values: np.ndarray, name: str) -> np.ndarray:
-    """`values` (float32), refused where one is NaN or infinite (a number beyond float32's
-    range included: the cast made it infinite)."""
-    bad = np.argwhere(~np.isfinite(values))
+def _physical(values: np.ndarray, name: str) -> np.ndarray:
+    """`values` (float32), refused where one is NaN, infinite (a number beyond float32's range
+    included: the cast made it infinite) or beyond MAX_OBSERVATION_MAGNITUDE."""
+    bad = np.argwhere(~(np.abs(values) <= MAX_OBSERVATION_MAGNITUDE))  # NaN compares False
     if len(bad):
-        raise RequestError(f"{name} must be finite numbers; got {values[tuple(bad[0])]} at "
+        raise RequestError(f"{name} must be finite numbers of magnitude at most "
+                           f"{MAX_OBSERVATION_MAGNITUDE:g}; got {values[tuple(bad[0])]:g} at "
                            f"{bad[0].tolist()}")
     return values
+
+
+def checked_actions(actions) -> np.ndarray:
+    """A policy's chunk as a server sends it: float32 [T, 14]. BadActionError says what is
+    wrong with one that is not real finite numbers of that shape (`validate_actions`), as
+    float32 too (a number beyond its range would arrive infinite)."""
+    try:
+        validate_actions(actions)
+        with np.errstate(over="ignore"):
+            chunk = np.asarray(actions, dtype=np.float32).reshape(-1, ACTION_WIDTH)
+        validate_actions(chunk)
+    except BadActionError as error:
+        raise BadActionError("the policy returned actions the protocol cannot carry: "
+                             f"{error}") from None
+    return chunk
 
 
 class ServedPolicy:
@@ -187,7 +211,7 @@ class ServedPolicy:
                     "drive it: serve a policy that reads state, instruction and images")
             obs["privileged"] = self._privileged(privileged)
         self.acted = True
-        return np.asarray(self.policy.act(obs), dtype=np.float32)
+        return checked_actions(self.policy.act(obs))
 
     def _privileged(self, message) -> Privileged:
         """The episode's start, rebuilt when {scene, layout, seed} changes."""
@@ -228,7 +252,7 @@ def _checked_state(state) -> np.ndarray:
         raise RequestError(f"'state' must be {ACTION_WIDTH} numbers (shape [{ACTION_WIDTH}], "
                            f"no batch axis), got shape {list(state.shape)}")
     with np.errstate(over="ignore"):  # a number beyond float32's range: infinite, refused
-        return _finite(state.astype(np.float32), "'state'")
+        return _physical(state.astype(np.float32), "'state'")
 
 
 class PolicyPool:
@@ -281,8 +305,8 @@ class PolicyPool:
 
 def error_reply(error: Exception, where: str) -> str:
     """What a client is told of a failed request: the error's type and message only. The
-    traceback is logged here (a bad request is logged without one)."""
-    if isinstance(error, RequestError | ServerBusyError):
+    traceback is logged here (a bad request or bad actions are logged without one)."""
+    if isinstance(error, RequestError | ServerBusyError | BadActionError):
         log.warning("%s: %s", where, error)
     else:
         log.error("%s: the policy failed", where, exc_info=error)

@@ -37,6 +37,15 @@ def _health(connection, request):
     return None
 
 
+def _peer(connection) -> str:
+    """The client's address as the log names it; "client" for one already gone (its socket
+    closed: a client that drops right after the handshake has no address left to ask)."""
+    try:
+        return str(connection.remote_address)
+    except OSError:
+        return "client"
+
+
 class PolicyServer:
     """Serves one Python policy; each connection in its own thread with its own policy
     instance, at most `limits.max_clients` at once."""
@@ -48,7 +57,7 @@ class PolicyServer:
         self.server = None
 
     def handle(self, connection) -> None:
-        peer = str(getattr(connection, "remote_address", "client"))
+        peer = _peer(connection)
         try:
             served = self.pool.acquire()
         except Exception as error:  # busy
