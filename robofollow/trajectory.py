@@ -13,10 +13,13 @@ from pathlib import Path
 
 import numpy as np
 
-from robofollow.errors import RoboFollowError
+from robofollow.errors import RoboFollowError, error_text
+from robofollow.files import file_problem
 
 ARMS = ("left", "right")
 CONTACT_EXTRAS = ("table", "left_gripper", "right_gripper")
+MAX_TRAJECTORY_BYTES = 1 << 30  # a trajectory's arrays unpacked (and so its file): scene 2's
+#   124-step pick-up takes 97 KB (41 KB saved); a long episode of a large layout, a few MB
 
 
 @dataclass
@@ -57,8 +60,9 @@ class Trajectory:
     @classmethod
     def load(cls, path: str | Path) -> "Trajectory":
         """Read a saved trajectory; TrajectoryError says what is wrong with a bad file."""
-        if Path(path).is_file() and not zipfile.is_zipfile(path):
-            raise TrajectoryError(f"{path}: not a .npz trajectory (not a zip archive)")
+        problem = _file_problem(Path(path))
+        if problem:
+            raise TrajectoryError(f"{path}: {problem}")
         try:
             with np.load(path, allow_pickle=False) as data:
                 missing = [k for k in ("bodies", "meta", *_ARRAYS) if k not in data.files]
@@ -68,8 +72,9 @@ class Trajectory:
                 trajectory = cls(bodies=tuple(str(b) for b in data["bodies"]),
                                  meta=json.loads(str(data["meta"])),
                                  **{name: data[name] for name in _ARRAYS})
-        except (OSError, ValueError, zipfile.BadZipFile) as error:
-            raise TrajectoryError(f"{path}: cannot read a trajectory ({error})") from None
+        except (OSError, ValueError, MemoryError, zipfile.BadZipFile) as error:
+            raise TrajectoryError(f"{path}: cannot read a trajectory ({error_text(error)})"
+                                  ) from None
         trajectory.check(path)
         return trajectory
 
@@ -86,6 +91,22 @@ class Trajectory:
                                       f"expected {shape} ({frames} frames, {bodies} bodies)")
         if frames == 0:
             raise TrajectoryError(f"{where}: the trajectory has no frames")
+
+
+def _file_problem(path: Path) -> str | None:
+    """Why a file is not read as a trajectory (not a regular file of at most
+    MAX_TRAJECTORY_BYTES, not a zip archive, or arrays that unpack to more), or None. (An
+    array's header may still claim more than its data: reading it then fails.)"""
+    problem = file_problem(path, MAX_TRAJECTORY_BYTES)
+    if problem:
+        return f"cannot read a trajectory: {problem}"
+    try:
+        with zipfile.ZipFile(path) as archive:
+            unpacked = sum(info.file_size for info in archive.infolist())
+    except (OSError, zipfile.BadZipFile):
+        return "not a .npz trajectory (not a zip archive)"
+    return (f"cannot read a trajectory: its arrays unpack to more than "
+            f"{MAX_TRAJECTORY_BYTES >> 20} MiB" if unpacked > MAX_TRAJECTORY_BYTES else None)
 
 
 _ARRAYS = ("movable", "time", "state", "action", "positions", "quaternions", "ee_positions",

@@ -399,3 +399,16 @@ def test_a_run_file_that_is_huge_a_fifo_or_a_device_is_refused_on_resume_and_rep
         for argv in (["eval", *RUN, "--out", str(run), "--resume"], ["report", str(run)]):
             assert main(argv) in (1, 2), argv
             _one_line_error(capsys, str(path), says)
+
+
+def test_a_report_of_an_unfinished_run_says_so_in_its_pages_and_on_stderr(finished, tmp_path,
+                                                                           capsys):
+    run = tmp_path / "run"
+    shutil.copytree(finished, run)
+    (run / "summary.json").unlink()  # (a run stopped before its end, or a merge cut short)
+    capsys.readouterr()
+    assert main(["report", str(run)]) == 0
+    says = "An unfinished run (no summary.json): this report covers the 2 episodes recorded"
+    assert says in capsys.readouterr().err
+    assert says in (run / "report.md").read_text() and says in (run / "report.html").read_text()
+    assert "unfinished" not in (finished / "report.md").read_text()

@@ -30,7 +30,10 @@ from robofollow.compiler.scene.behaviour import Behaviour
 from robofollow.compiler.scene.spec import LEVELS, Scene
 from robofollow.compiler.scene.world import World
 from robofollow.errors import RoboFollowError
-from robofollow.files import json_line, json_lines
+from robofollow.files import json_line, json_lines, read_file_at_most
+
+MAX_TASKS_FILE_BYTES = 64 * 1024 * 1024  # a build's tasks/SCENE_LEVEL.jsonl: the largest of the
+#   built-in benchmark's, scene3_L3.jsonl, takes 340 KB
 
 
 def _line(record: dict) -> str:
@@ -38,13 +41,12 @@ def _line(record: dict) -> str:
 
 
 def _task_ids(out: Path) -> set[str]:
-    """The test task ids of the build in `out`, if there is one (lines that cannot be read as
-    a task are passed over: this is a report, not a check)."""
+    """The test task ids of the build in `out`, if there is one (files and lines that cannot
+    be read as tasks are passed over: this is a report, not a check)."""
     ids = set()
     for path in sorted((out / "tasks").glob("*.jsonl")) if (out / "tasks").is_dir() else ():
-        try:
-            data = path.read_bytes()
-        except OSError:
+        data, problem = read_file_at_most(path, MAX_TASKS_FILE_BYTES)
+        if problem:
             continue
         ids.update(str(line.value["task"]) for line in json_lines(data)
                    if isinstance(line.value, dict) and "task" in line.value)

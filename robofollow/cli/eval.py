@@ -119,6 +119,17 @@ def add_eval(commands) -> None:
     p.set_defaults(handler=cmd_eval)
 
 
+def _read_recorded(folders) -> None:
+    """The run.json of each run to resume, checked as every reader of a run checks it (a bad
+    one is one line naming the file and field) before its options are compared."""
+    from robofollow.eval.running.run_folder import RUN_FILE, present
+    from robofollow.eval.running.saved_run import read_run_file
+
+    for out in folders:
+        if present(out / RUN_FILE):
+            read_run_file(out)
+
+
 def cmd_eval(args) -> int:
     from robofollow.compiler.authoring.spec_loader import load_spec
     from robofollow.eval.policies.loading import check_policy, with_privileged
@@ -169,6 +180,8 @@ def cmd_eval(args) -> int:
                           args.shard, tuple(controls), **source)
     arms = [(Path(args.out), options)] + [
         (safe_path(Path(args.out), CONTROLS, mode), options.arm(mode)) for mode in controls]
+    if args.resume:
+        _read_recorded(out for out, _ in arms)
     if args.tasks is None:
         for out, arm in arms:
             check_prepare(out, arm.to_json(), args.resume)

@@ -3,7 +3,6 @@ LeRobot's two layouts share (info.json, episode frames, statistics, videos, tota
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -13,9 +12,16 @@ import pyarrow as pa
 import pyarrow.compute as pc
 import pyarrow.parquet as pq
 
+from robofollow.data import lerobot_v30
 from robofollow.data.lerobot import VIDEO_KEYS
 from robofollow.data.stats import BINS, QUANTILE_KEYS, array_stats
-from robofollow.files import json_lines
+from robofollow.files import (
+    file_problem,
+    json_lines,
+    read_file_at_most,
+    read_json_file,
+    shown,
+)
 from robofollow.sim import robot
 from robofollow.sim.objects import FLAT as OBJECTS_WIDTH
 from robofollow.sim.video import probe
@@ -28,6 +34,16 @@ SCALAR_FEATURES = {"timestamp": "float32", "frame_index": "int64", "episode_inde
                    "index": "int64", "task_index": "int64"}
 STATS_TOLERANCE = 1e-4  # absolute, on recomputed state/action statistics
 TIME_TOLERANCE = 1e-4  # s
+# the largest a dataset's files are read (training reads them alike): a JSON file, info.json (a
+# generated one: about 9 KB) or stats.json; a JSON Lines file, of which episodes_stats.jsonl is
+# the largest (about 40 KB an episode: 150 MB for the benchmark's 3,750 demonstrations, 460 MB
+# with --instructions all; episodes.jsonl takes 280 bytes an episode); a parquet file (v2.1's
+# hold an episode, about 21 KB; v3.0's are closed at DATA_FILE_MB, LeRobot's default); a video
+# (v2.1's hold an episode, about 0.5 MB at 320x240; v3.0's are closed at VIDEO_FILE_MB)
+MAX_JSON_BYTES = 16 * 1024 * 1024
+MAX_JSONL_BYTES = 1 << 30
+MAX_PARQUET_BYTES = 10 * lerobot_v30.DATA_FILE_MB << 20
+MAX_VIDEO_BYTES = 4 * lerobot_v30.VIDEO_FILE_MB << 20
 
 
 @dataclass
@@ -63,24 +79,29 @@ class Report:
         return "\n".join(lines)
 
 
-def load_json(path: Path, report: Report):
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, ValueError) as error:
-        report.error(path.name, f"unreadable: {error}")
+def load_json(path: Path, report: Report) -> dict | None:
+    """A JSON object file (at most MAX_JSON_BYTES), or None (reported)."""
+    data, problem = read_json_file(path, MAX_JSON_BYTES)
+    if not problem and not isinstance(data, dict):
+        problem = f"{shown(data)} is not a JSON object"
+    if problem:
+        report.error(path.name, f"unreadable: {problem}")
         return None
+    return data
 
 
 def load_jsonl(path: Path, report: Report) -> list[dict]:
-    try:
-        data = path.read_bytes()
-    except OSError as error:
-        report.error(path.name, f"unreadable: {error}")
+    """The objects of a JSON Lines file (at most MAX_JSONL_BYTES); each other line is
+    reported."""
+    data, problem = read_file_at_most(path, MAX_JSONL_BYTES)
+    if problem:
+        report.error(path.name, f"unreadable: {problem}")
         return []
     records = []
     for line in json_lines(data):
-        if line.problem:
-            report.error(f"{path.name}:{line.number}:{line.column}", line.problem)
+        if line.problem or not isinstance(line.value, dict):
+            report.error(f"{path.name}:{line.number}:{line.column or 1}",
+                         line.problem or f"{shown(line.value)} is not a JSON object")
         else:
             records.append(line.value)
     return records
@@ -247,8 +268,12 @@ def check_video(path: Path, feature: dict, fps: float, report: Report,
                  where: str) -> list[float] | None:
     """Opens, has the feature's resolution and the dataset's frame rate; its frame times (or
     None when unusable)."""
-    if not path.is_file():
+    if not path.exists():
         report.error(where, f"missing video {path.name}")
+        return None
+    problem = file_problem(path, MAX_VIDEO_BYTES)
+    if problem:
+        report.error(where, f"video {path.name}: {problem}")
         return None
     try:
         video = probe(path)
@@ -282,10 +307,20 @@ def check_sequence(indices: list, where: str, what: str, report: Report) -> bool
 
 def read_parquets(folder: Path, report: Report) -> pa.Table | None:
     files = sorted(folder.glob("chunk-*/file-*.parquet"))
+    where = str(folder.relative_to(folder.parent.parent))
     if not files:
-        report.error(str(folder.relative_to(folder.parent.parent)), "no parquet files")
+        report.error(where, "no parquet files")
         return None
-    return pa.concat_tables([pq.read_table(f) for f in files])
+    for file in files:
+        problem = file_problem(file, MAX_PARQUET_BYTES)
+        if problem:
+            report.error(f"{where}/{file.relative_to(folder)}", f"unreadable: {problem}")
+            return None
+    try:
+        return pa.concat_tables([pq.read_table(f) for f in files])
+    except (OSError, pa.ArrowException) as error:
+        report.error(where, f"unreadable: {error}")
+        return None
 
 
 def read_tasks(path: Path, report: Report) -> list[dict] | None:
@@ -295,6 +330,10 @@ def read_tasks(path: Path, report: Report) -> list[dict] | None:
     and listed in the schema's pandas metadata (index_columns); a plain "task" column is read
     too."""
     where = "meta/tasks.parquet"
+    problem = file_problem(path, MAX_PARQUET_BYTES)
+    if problem:
+        report.error(where, f"unreadable: {problem}")
+        return None
     try:
         table = pq.read_table(path)
         metadata = table.schema.pandas_metadata

@@ -10,7 +10,7 @@ and the work folder removed.
 
 from __future__ import annotations
 
-import json
+import os
 import shutil
 import time
 from dataclasses import dataclass, field
@@ -22,9 +22,9 @@ from tqdm import tqdm
 from robofollow.benchmark.episode import Benchmark
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
 from robofollow.data.jobs import DemoJob, demo_jobs
-from robofollow.data.units import Options, UnitRecorder, unit_path
+from robofollow.data.units import Options, UnitRecorder, read_record, unit_path
 from robofollow.errors import RoboFollowError
-from robofollow.files import changed_options, write_json_atomic
+from robofollow.files import changed_options, number_problem, shown, write_json_atomic
 from robofollow.workers import results
 
 WRITERS = {"lerobot-v2.1": lerobot_v21.write, "lerobot-v3.0": lerobot_v30.write,
@@ -53,16 +53,13 @@ class GenerateResult:
 def _check_folder(out: Path, options: Options, resume: bool) -> None:
     """Refuse to mix datasets: a fresh run needs an empty folder, a resumed one the same
     options as the run it continues."""
-    work = out / WORK
-    recorded = work / "options.json"
-    previous = (json.loads(recorded.read_text(encoding="utf-8")) if recorded.is_file()
-                else _manifest(out).get("options") if (out / MANIFEST).is_file() else None)
     occupied = out.is_dir() and any(out.iterdir())
     if not resume:
         if occupied:
             raise GenerateError(f"{out} is not empty; pass --resume to continue an interrupted "
                                 "run there, or choose another folder")
         return
+    previous = _previous_options(out)
     if previous is None:
         if occupied:
             raise GenerateError(f"{out} holds files but no RoboFollow generation to resume")
@@ -72,8 +69,40 @@ def _check_folder(out: Path, options: Options, resume: bool) -> None:
         raise GenerateError(f"{out} {problem}")
 
 
+def _previous_options(out: Path) -> dict | None:
+    """The options of the generation in `out`: an interrupted one's (.work/options.json), else
+    a complete one's (its manifest); None where there is neither."""
+    recorded = out / WORK / "options.json"
+    if os.path.lexists(recorded):
+        return read_record(recorded)
+    return _manifest(out)["options"] if os.path.lexists(out / MANIFEST) else None
+
+
+COUNTS = ("episodes", "demonstrations", "discarded_attempts")  # of the manifest: whole numbers
+
+
 def _manifest(out: Path) -> dict:
-    return json.loads((out / MANIFEST).read_text(encoding="utf-8"))
+    """manifest.json, with the fields generate reads (options, COUNTS, failed) checked."""
+    path = out / MANIFEST
+    manifest = read_record(path)
+    problem = _manifest_problem(manifest)
+    if problem:
+        raise GenerateError(f"{path}: {problem}")
+    return manifest
+
+
+def _manifest_problem(manifest: dict) -> str | None:
+    if not isinstance(manifest.get("options"), dict):
+        return f"options is {shown(manifest.get('options'))}, not an object"
+    for key in COUNTS:
+        if not isinstance(manifest.get(key), int) or number_problem(manifest[key], 0):
+            return f"{key} is {shown(manifest.get(key))}, not a whole number from 0"
+    failed = manifest.get("failed")
+    if not (isinstance(failed, list) and all(isinstance(job, dict) and
+                                             isinstance(job.get("failed"), str)
+                                             for job in failed)):
+        return f"failed is {shown(failed)}, not a list of failed jobs"
+    return None
 
 
 # -- recording -----------------------------------------------------------------------------
@@ -110,7 +139,7 @@ def _write(out: Path, options: Options, jobs: list[DemoJob], failed: list[dict],
     for job in jobs:
         unit = unit_path(work, job)
         if (unit / "demo.json").is_file():
-            demos.append((json.loads((unit / "demo.json").read_text(encoding="utf-8")), unit))
+            demos.append((read_record(unit / "demo.json"), unit))
     _clear_dataset(out)
     per_demo = [1 if options.format == "hdf5" else len(d["instructions"]) for d, _ in demos]
     with tqdm(total=sum(per_demo), desc="writing", unit="episode", disable=not progress) as bar:

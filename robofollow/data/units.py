@@ -24,6 +24,7 @@ from robofollow.compiler.scene.spec import Scene
 from robofollow.data.jobs import MAX_ATTEMPTS, DemoJob
 from robofollow.data.sinks import ArraySink, FrameSink, VideoSink
 from robofollow.errors import RoboFollowError
+from robofollow.files import read_json_file, shown
 from robofollow.sim import robot
 from robofollow.sim.objects import objects_over
 from robofollow.sim.rollout import ExpertRunner
@@ -31,6 +32,9 @@ from robofollow.sim.simulation import CONTROL_HZ
 from robofollow.trajectory import Trajectory
 
 ROBOT_TYPE = "aloha_agilex"  # upstream's robot_type, so existing ALOHA configs apply
+MAX_RECORD_BYTES = 64 * 1024 * 1024  # a generation's JSON records: demo.json and
+#   .work/options.json take about 1 KB, manifest.json about 400 bytes a demonstration (1.5 MB
+#   for the benchmark's 3,750)
 
 
 @dataclass(frozen=True)
@@ -63,6 +67,20 @@ def unit_path(work: Path, job: DemoJob) -> Path:
     return work / "units" / job.key
 
 
+class RecordError(RoboFollowError):
+    """A generation's record (demo.json, options.json, manifest.json) that cannot be read."""
+
+
+def read_record(path: Path) -> dict:
+    """A JSON object file of at most MAX_RECORD_BYTES; else RecordError naming it."""
+    data, problem = read_json_file(path, MAX_RECORD_BYTES)
+    if not problem and not isinstance(data, dict):
+        problem = f"{shown(data)} is not a JSON object"
+    if problem:
+        raise RecordError(f"{path}: {problem}")
+    return data
+
+
 class RejectedAttemptError(RoboFollowError):
     """The oracle did not score an attempt complete."""
 
@@ -90,7 +108,7 @@ class UnitRecorder:
         """Record the job (unless its unit already exists); returns its demo.json record."""
         final = unit_path(self.work, job)
         if (final / "demo.json").is_file():
-            return json.loads((final / "demo.json").read_text(encoding="utf-8"))
+            return read_record(final / "demo.json")
         scratch = self.work / "tmp" / f"{job.label}.{job.index:04d}.{os.getpid()}"
         discarded = []
         for attempt in range(MAX_ATTEMPTS):

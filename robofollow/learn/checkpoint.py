@@ -15,6 +15,7 @@ checkpoint intact.
 from __future__ import annotations
 
 import json
+import math
 import os
 import zipfile
 import zlib
@@ -26,6 +27,7 @@ from pydantic import TypeAdapter, ValidationError
 
 from robofollow.errors import RoboFollowError, did_you_mean, error_text
 from robofollow.files import (
+    file_problem,
     key_problem,
     number_problem,
     read_json_file,
@@ -60,7 +62,9 @@ class Checkpoint:
 
 
 def is_checkpoint(path: str | Path) -> bool:
-    return (Path(path) / "policy.json").is_file()
+    """Whether a folder holds a policy.json, of any kind (loading says what is wrong with one
+    that is not a file)."""
+    return os.path.lexists(Path(path) / "policy.json")
 
 
 def save(folder: Path, checkpoint: Checkpoint, optimizer: dict[str, np.ndarray] | None = None
@@ -78,6 +82,10 @@ META_KEYS = ("format", "architecture", "vocab", "normalization", "execute", "tra
 MAX_POLICY_BYTES = 16 * 1024 * 1024  # policy.json: the shipped ones are under 5 KB
 MAX_PARAMETERS = 64 * 1024 * 1024  # values the architecture may ask of params.npz (256 MB as
 #   float32); the shipped baselines hold under 0.9 M (hidden 512, embed 64)
+MAX_PARAMS_BYTES = 8 * MAX_PARAMETERS + (1 << 20)  # params.npz: MAX_PARAMETERS values as
+#   float64 (training writes float32) and the archive's headers; the shipped ones are 3.1-3.5 MB
+MAX_OPTIMIZER_BYTES = 2 * MAX_PARAMS_BYTES  # optimizer.npz: Adam's two moments of every
+#   parameter and the step; twice params.npz (about 7 MB for a network of the shipped size)
 NORMALIZED = {"state": ACTION_WIDTH, "action": ACTION_WIDTH, "objects": OBJECT_FIELDS}
 _ARCHITECTURE = TypeAdapter(Architecture)
 _ARCH_FIELDS = fields(Architecture)
@@ -221,40 +229,61 @@ def _normalization(path: Path, data, arch: Architecture) -> dict[str, np.ndarray
 def _params(path: Path, shapes: dict[str, tuple[int, ...]]) -> dict[str, np.ndarray]:
     """params.npz: exactly the arrays the architecture has (`shapes`), each of its shape, of
     finite floats; each array's header is checked before its data is read."""
+    def read(archive: zipfile.ZipFile) -> dict[str, np.ndarray]:
+        stored = {info.filename.removesuffix(".npy"): info.filename
+                  for info in archive.infolist()}
+        found = key_problem(stored, shapes)
+        if found:
+            kind, name = found
+            raise CheckpointError(f"{path}: {'lacks' if kind == 'missing' else 'holds'} "
+                                  f"the array {shown(name)}, which the architecture "
+                                  f"{'has' if kind == 'missing' else 'has not'}")
+        return {name: _array(path, archive, stored[name], shapes[name]) for name in shapes}
+    return _archive(path, MAX_PARAMS_BYTES, "not a readable baseline checkpoint", read)
+
+
+def _archive(path: Path, limit: int, what: str, read):
+    """`read(archive)` of the .npz file at `path`, a regular file of at most `limit` bytes;
+    else a CheckpointError naming it and saying `what`."""
+    problem = file_problem(path, limit)
+    if problem:
+        raise CheckpointError(f"{path}: {problem}; {what}")
     try:
         with zipfile.ZipFile(path) as archive:
-            stored = {info.filename.removesuffix(".npy"): info.filename
-                      for info in archive.infolist()}
-            found = key_problem(stored, shapes)
-            if found:
-                kind, name = found
-                raise CheckpointError(f"{path}: {'lacks' if kind == 'missing' else 'holds'} "
-                                      f"the array {shown(name)}, which the architecture "
-                                      f"{'has' if kind == 'missing' else 'has not'}")
-            return {name: _array(path, archive, stored[name], shapes[name]) for name in shapes}
+            return read(archive)
     except (OSError, EOFError, ValueError, zipfile.BadZipFile, zlib.error, RuntimeError,
             NotImplementedError) as error:
-        raise CheckpointError(f"{path}: not a readable baseline checkpoint "
-                              f"({error_text(error)})") from None
+        raise CheckpointError(f"{path}: {what} ({error_text(error)})") from None
+
+
+def _header(archive: zipfile.ZipFile, member: str) -> tuple[tuple[int, ...], np.dtype]:
+    """A .npy member's shape and dtype, from its header alone."""
+    with archive.open(member) as stream:
+        version = np.lib.format.read_magic(stream)
+        if version not in ((1, 0), (2, 0)):
+            raise ValueError(f"{member.removesuffix('.npy')}: a .npy file of version "
+                             f"{version}")
+        read_header = (np.lib.format.read_array_header_1_0 if version == (1, 0) else
+                       np.lib.format.read_array_header_2_0)
+        shape, _, dtype = read_header(stream)
+    return shape, dtype
+
+
+def _read(archive: zipfile.ZipFile, member: str) -> np.ndarray:
+    with archive.open(member) as stream:
+        return np.lib.format.read_array(stream, allow_pickle=False)
 
 
 def _array(path: Path, archive: zipfile.ZipFile, member: str, shape: tuple[int, ...]
            ) -> np.ndarray:
     name = member.removesuffix(".npy")
-    with archive.open(member) as stream:
-        version = np.lib.format.read_magic(stream)
-        if version not in ((1, 0), (2, 0)):
-            raise ValueError(f"{name}: a .npy file of version {version}")
-        read_header = (np.lib.format.read_array_header_1_0 if version == (1, 0) else
-                       np.lib.format.read_array_header_2_0)
-        stored, _, dtype = read_header(stream)
+    stored, dtype = _header(archive, member)
     if stored != shape:
         raise CheckpointError(f"{path}: {name} has the shape {stored}, but the architecture "
                               f"needs {shape}")
     if dtype.kind != "f":
         raise CheckpointError(f"{path}: {name} holds {dtype}, not floats")
-    with archive.open(member) as stream:
-        array = np.lib.format.read_array(stream, allow_pickle=False)
+    array = _read(archive, member)
     if not np.isfinite(array).all():
         raise CheckpointError(f"{path}: {name} holds values that are not finite (NaN or "
                               "infinite)")
@@ -262,13 +291,18 @@ def _array(path: Path, archive: zipfile.ZipFile, member: str, shape: tuple[int, 
 
 
 def load_optimizer(folder: Path) -> dict[str, np.ndarray]:
-    try:
-        with np.load(folder / "optimizer.npz", allow_pickle=False) as data:
-            return {key: data[key] for key in data.files}
-    except (OSError, EOFError, ValueError, zipfile.BadZipFile, zlib.error, RuntimeError,
-            NotImplementedError) as error:
-        raise CheckpointError(f"{folder}/optimizer.npz: cannot resume "
-                              f"({error_text(error)})") from None
+    """optimizer.npz: Adam's step and moments, at most MAX_OPTIMIZER_BYTES of arrays (their
+    headers are read before their data)."""
+    return _archive(folder / "optimizer.npz", MAX_OPTIMIZER_BYTES, "cannot resume", _moments)
+
+
+def _moments(archive: zipfile.ZipFile) -> dict[str, np.ndarray]:
+    headers = {member: _header(archive, member) for member in archive.namelist()}
+    size = sum(math.prod(shape) * dtype.itemsize for shape, dtype in headers.values())
+    if size > MAX_OPTIMIZER_BYTES:
+        raise ValueError(f"its arrays hold {size:,} bytes, more than the {MAX_OPTIMIZER_BYTES:,}"
+                         " of an optimizer state")
+    return {member.removesuffix(".npy"): _read(archive, member) for member in headers}
 
 
 def _atomic(path: Path, write) -> None:

@@ -14,6 +14,7 @@ import json
 import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from itertools import islice
 from pathlib import Path
 
 import av
@@ -22,10 +23,23 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from robofollow.data import lerobot_v21, lerobot_v30
+from robofollow.data.check_parts import (
+    MAX_JSON_BYTES,
+    MAX_JSONL_BYTES,
+    MAX_PARQUET_BYTES,
+    MAX_VIDEO_BYTES,
+)
 from robofollow.data.lerobot import ENVIRONMENT_STATE, vectors
 from robofollow.data.sinks import image_key
 from robofollow.errors import RoboFollowError
-from robofollow.files import json_lines
+from robofollow.files import (
+    file_problem,
+    json_lines,
+    number_problem,
+    read_file_at_most,
+    read_json_file,
+    shown,
+)
 from robofollow.sim.objects import SHAPE as OBJECTS_SHAPE
 
 
@@ -68,14 +82,9 @@ def read_demonstrations(root: Path, cameras: tuple[str, ...], factor: int,
                         objects: bool = False) -> Demonstrations:
     """The dataset under `root`; `progress(n)` is called as episodes' frames are decoded;
     `objects`: read the objects observation too."""
-    info = _json(root / "meta" / "info.json")
-    version = info.get("codebase_version")
-    if version == lerobot_v21.VERSION:
-        episodes = _v21_episodes(root)
-    elif version == lerobot_v30.VERSION:
-        episodes = _v30_episodes(root)
-    else:
-        raise DatasetError(f"{root}: codebase_version {version!r} is not v2.1 or v3.0")
+    info = _info(root / "meta" / "info.json")
+    episodes = (_v21_episodes(root) if info["codebase_version"] == lerobot_v21.VERSION
+                else _v30_episodes(root))
     frames = _frames(root, objects)
     starts = np.cumsum([0] + [e["length"] for e in episodes[:-1]]).astype(np.int64)
     lengths = np.array([e["length"] for e in episodes], np.int64)
@@ -90,34 +99,101 @@ def read_demonstrations(root: Path, cameras: tuple[str, ...], factor: int,
                           frames.get("objects"))
 
 
-def _json(path: Path) -> dict:
+# the keys each version's video_path template is formatted with (the values try it)
+VIDEO_PATH_KEYS = {lerobot_v21.VERSION: {"episode_chunk": 0, "video_key": "", "episode_index": 0},
+                   lerobot_v30.VERSION: {"video_key": "", "chunk_index": 0, "file_index": 0}}
+
+
+def _info(path: Path) -> dict:
+    """meta/info.json: an object whose codebase_version, fps, features, video_path and (v2.1)
+    chunks_size training can use; the other fields are not read."""
+    info, problem = read_json_file(path, MAX_JSON_BYTES)
+    problem = problem or _info_problem(info)
+    if problem:
+        raise DatasetError(f"{path}: not a readable dataset file ({problem})")
+    return info
+
+
+def _info_problem(info) -> str | None:
+    if not isinstance(info, dict):
+        return f"{shown(info)} is not a JSON object"
+    version = info.get("codebase_version")
+    if not isinstance(version, str) or version not in VIDEO_PATH_KEYS:
+        return f"codebase_version is {shown(version)}, not v2.1 or v3.0"
+    fps = number_problem(info.get("fps"), 1)
+    if fps:
+        return f"fps {fps}"
+    if not isinstance(info.get("features", {}), dict):
+        return f"features is {shown(info['features'])}, not an object"
+    if version == lerobot_v21.VERSION and not _whole(info.get("chunks_size"), 1):
+        return f"chunks_size is {shown(info.get('chunks_size'))}, not a whole number from 1"
     try:
-        return json.loads(path.read_text())
-    except (OSError, ValueError) as error:
-        raise DatasetError(f"{path}: not a readable dataset file ({error})") from None
+        info["video_path"].format(**VIDEO_PATH_KEYS[version])
+    except (AttributeError, KeyError, IndexError, TypeError, ValueError):
+        return (f"video_path is {shown(info.get('video_path'))}, not a path template of "
+                f"{', '.join(VIDEO_PATH_KEYS[version])}")
+    return None
+
+
+def _whole(value, low: int) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= low
+
+
+def _episode_problem(record) -> str | None:
+    """What is wrong with an episode's record (episode_index, length, tasks, an optional
+    label: the fields training reads), or None."""
+    if not isinstance(record, dict):
+        return f"{shown(record)} is not an object"
+    for key in ("episode_index", "length"):
+        if not _whole(record.get(key), 0):
+            return f"{key} is {shown(record.get(key))}, not a whole number from 0"
+    tasks = record.get("tasks")
+    if not (isinstance(tasks, list) and tasks and all(isinstance(t, str) for t in tasks)):
+        return f"tasks is {shown(tasks)}, not a list of instructions"
+    if not isinstance(record.get("label") or "", str):
+        return f"label is {shown(record['label'])}, not a string"
+    return None
 
 
 def _v21_episodes(root: Path) -> list[dict]:
     path = root / "meta" / "episodes.jsonl"
-    try:
-        lines = list(json_lines(path.read_bytes()))
-    except OSError as error:
-        raise DatasetError(f"{path}: {error}") from None
-    for line in lines:
+    data, problem = read_file_at_most(path, MAX_JSONL_BYTES)
+    if problem:
+        raise DatasetError(f"{path}: {problem}")
+    episodes = []
+    for line in json_lines(data):
         if line.problem:
             raise DatasetError(f"{path}:{line.number}:{line.column}: {line.problem}")
-    return sorted((line.value for line in lines), key=lambda e: e["episode_index"])
+        problem = _episode_problem(line.value)
+        if problem:
+            raise DatasetError(f"{path}:{line.number}: {problem}")
+        episodes.append(line.value)
+    return sorted(episodes, key=lambda e: e["episode_index"])
 
 
 def _v30_episodes(root: Path) -> list[dict]:
-    files = sorted((root / "meta" / "episodes").rglob("*.parquet"))
+    folder = root / "meta" / "episodes"
+    files = sorted(folder.rglob("*.parquet"))
     if not files:
-        raise DatasetError(f"{root}/meta/episodes: no parquet files")
+        raise DatasetError(f"{folder}: no parquet files")
     try:
-        rows = pa.concat_tables([pq.read_table(f) for f in files]).to_pylist()
+        rows = pa.concat_tables([_table(f) for f in files]).to_pylist()
     except (OSError, pa.ArrowException) as error:
-        raise DatasetError(f"{root}/meta/episodes: {error}") from None
+        raise DatasetError(f"{folder}: {error}") from None
+    for number, row in enumerate(rows):
+        problem = _episode_problem(row)
+        if problem:
+            raise DatasetError(f"{folder}: row {number}: {problem}")
     return sorted(rows, key=lambda e: e["episode_index"])
+
+
+def _table(path: Path, columns: list[str] | None = None) -> pa.Table:
+    """A parquet file's table; DatasetError for one that is not a regular file of at most
+    MAX_PARQUET_BYTES."""
+    problem = file_problem(path, MAX_PARQUET_BYTES)
+    if problem:
+        raise DatasetError(f"{path}: {problem}")
+    return pq.read_table(path, columns=columns)
 
 
 def _frames(root: Path, objects: bool) -> dict[str, np.ndarray]:
@@ -126,7 +202,7 @@ def _frames(root: Path, objects: bool) -> dict[str, np.ndarray]:
         raise DatasetError(f"{root}/data: no parquet files")
     columns = ["observation.state", "action", "index"] + ([ENVIRONMENT_STATE] if objects else [])
     try:
-        table = pa.concat_tables(pq.read_table(f, columns=columns) for f in files)
+        table = pa.concat_tables(_table(f, columns) for f in files)
     except (OSError, pa.ArrowException, KeyError) as error:
         lacks = objects and ENVIRONMENT_STATE in str(error)
         raise DatasetError(f"{root}/data: " + (
@@ -177,9 +253,11 @@ def _camera(root: Path, info: dict, episodes: list[dict], camera: str, factor: i
     by_file: dict[Path, list[int]] = {}
     for position, (file, _, _) in enumerate(segments):
         by_file.setdefault(file, []).append(position)
+    needed = {file: max(segments[p][1] + segments[p][2] for p in positions)
+              for file, positions in by_file.items()}
     parts: list[np.ndarray | None] = [None] * len(segments)
     with ThreadPoolExecutor(max(1, min(4, os.cpu_count() or 1))) as pool:
-        decoded = pool.map(lambda file: _decode(file, factor), by_file)
+        decoded = pool.map(lambda file: _decode(file, factor, needed[file]), by_file)
         for file, frames in zip(by_file, decoded, strict=True):
             for position in by_file[file]:  # a v3.0 file holds several episodes
                 _, first, count = segments[position]
@@ -199,11 +277,14 @@ def _camera(root: Path, info: dict, episodes: list[dict], camera: str, factor: i
     return result
 
 
-def _decode(file: Path, factor: int) -> np.ndarray:
-    """Every frame of a video, shrunk by `factor`."""
+def _decode(file: Path, factor: int, frames: int) -> np.ndarray:
+    """A video's first `frames` frames (as many as its episodes need), shrunk by `factor`."""
+    problem = file_problem(file, MAX_VIDEO_BYTES)
+    if problem:
+        raise DatasetError(f"{file}: {problem}")
     try:
         with av.open(str(file)) as container:
             return np.stack([downsample(frame.to_ndarray(format="rgb24"), factor)
-                             for frame in container.decode(video=0)])
+                             for frame in islice(container.decode(video=0), frames)])
     except (OSError, ValueError, av.FFmpegError) as error:
         raise DatasetError(f"{file}: cannot decode ({error})") from None

@@ -10,10 +10,15 @@ from __future__ import annotations
 from collections import defaultdict
 from pathlib import Path
 
+from pydantic import ValidationError
+
 from robofollow.errors import RoboFollowError
-from robofollow.files import json_lines
+from robofollow.files import json_lines, read_file_at_most, shown
 from robofollow.vqa.answers import Expected
 from robofollow.vqa.score import score
+
+MAX_ANSWERS_BYTES = 256 * 1024 * 1024  # ANSWERS.jsonl or questions.jsonl: about 1 KB a
+#   question (the QA-20 probe's questions.jsonl: 20 KB)
 
 
 class GradeError(RoboFollowError):
@@ -21,35 +26,50 @@ class GradeError(RoboFollowError):
 
 
 def _read_jsonl(path: Path) -> list[tuple[int, dict]]:
-    try:
-        data = path.read_bytes()
-    except OSError as error:
-        raise GradeError(f"cannot read {path}: {error.strerror}") from None
+    """(line number, record) of each line: an object whose "id" is a string."""
+    data, problem = read_file_at_most(path, MAX_ANSWERS_BYTES)
+    if problem:
+        raise GradeError(f"{path}: {problem}")
     records = []
     for line in json_lines(data):
         if line.problem:
             raise GradeError(f"{path}:{line.number}:{line.column}: {line.problem}")
         if not isinstance(line.value, dict):
             raise GradeError(f"{path}:{line.number}: expected an object per line")
+        if not isinstance(line.value.get("id"), str):
+            raise GradeError(f"{path}:{line.number}: id is {shown(line.value.get('id'))}, "
+                             "not a string")
         records.append((line.number, line.value))
     return records
 
 
+def _expected(where: str, question: dict) -> Expected:
+    """The question's expected answer; else GradeError at `where`, naming the field."""
+    try:
+        return Expected.model_validate(question.get("expected"))
+    except ValidationError as error:
+        first = error.errors()[0]
+        field = ".".join(map(str, ("expected", *first["loc"])))
+        raise GradeError(f"{where}: {field} is {shown(first['input'])}: {first['msg']}"
+                         ) from None
+
+
 def grade(answers: Path, questions: Path | None = None) -> dict:
     """{"correct", "total", "templates": {template: [correct, total]}, "results": [...]}."""
-    known: dict[str, dict] = {}
-    questions = questions or answers.parent / "questions.jsonl"
-    if questions.is_file() and questions.resolve() != answers.resolve():
-        known = {r["id"]: r for _, r in _read_jsonl(questions)}
+    known: dict[str, tuple[str, dict]] = {}  # id -> (file:line, question)
+    given, questions = questions is not None, questions or answers.parent / "questions.jsonl"
+    if (given or questions.is_file()) and questions.resolve() != answers.resolve():
+        known = {r["id"]: (f"{questions}:{n}", r) for n, r in _read_jsonl(questions)}
     results, templates = [], defaultdict(lambda: [0, 0])
     for number, record in _read_jsonl(answers):
         where = f"{answers}:{number}"
-        if "prediction" not in record or "id" not in record:
+        if "prediction" not in record:
             raise GradeError(f"{where}: each line needs \"id\" and \"prediction\"")
-        question = record if "expected" in record else known.get(record["id"])
+        at, question = ((where, record) if "expected" in record else
+                        known.get(record["id"], (where, None)))
         if question is None:
             raise GradeError(f"{where}: question {record['id']!r} is not in {questions}")
-        expected = Expected.model_validate(question["expected"])
+        expected = _expected(at, question)
         verdict = score(str(record["prediction"]), expected)
         results.append({"id": record["id"], "question": question.get("question", ""),
                         "prediction": record["prediction"], "answer": expected.text,

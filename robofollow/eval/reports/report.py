@@ -37,6 +37,7 @@ from robofollow.eval.reports.pages import PAGES
 from robofollow.eval.reports.report_data import report_data
 from robofollow.eval.running.run_folder import (
     CONTROLS,
+    SUMMARY,
     check_folder_out,
     control_arms,
     safe_path,
@@ -77,9 +78,15 @@ def write_report(run: Path, motions: dict[str, str | None] | None = None,
     if counted is not None and len(results) < counted:
         raise ReportError(f"{run}: its summary counts {counted} episodes but only "
                           f"{len(results)} are here; the report was left as it is")
+    unfinished = None if counted is not None else (
+        f"An unfinished run (no {SUMMARY}): this report covers the {len(results)} episodes "
+        "recorded so far; `robofollow eval` with the run's options and --resume finishes it.")
+    if unfinished:
+        print(f"warning: {run}: {unfinished}", file=sys.stderr)
     data = report_data(run.name, options, with_motion(results, motions or {}),
                        control_comparisons(run) if controls is None else controls,
                        load_provenance(run))
+    data["unfinished"] = unfinished
     try:
         data["figures"], data["figures_missing"] = run_figures(data, run), None
     except FiguresUnavailable as error:

@@ -279,7 +279,7 @@ def _unstarted(out: Path) -> bool:
 
 def finished(out: Path) -> bool:
     """Whether the folder keeps a finished run's results: its summary and scores."""
-    return (out / SUMMARY).is_file() and (out / SCORES).is_file()
+    return present(out / SUMMARY) and present(out / SCORES)
 
 
 def _lines(path: Path) -> int:
@@ -295,7 +295,7 @@ def summarised_episodes(run: Path) -> int | None:
     """How many episodes the run's summary (RUN/summary.json) counts, if it has one (checked:
     a JSON object whose `episodes` is a whole number from 0)."""
     path = run / SUMMARY
-    if not path.is_file():
+    if not present(path):
         return None
     summary = read_json_object(path, "a run's summary")
     if "episodes" not in summary:
