@@ -178,8 +178,8 @@ def not_regular(mode: int) -> str | None:
     or None for a regular file."""
     if stat.S_ISREG(mode):
         return None
-    return "a folder, not a file" if stat.S_ISDIR(mode) else (
-        "not a regular file (a FIFO, socket or device); it is not read")
+    return ("a folder, not a file" if stat.S_ISDIR(mode)
+            else "not a regular file (a FIFO, socket or device)")
 
 
 def file_problem(path: Path, limit: int) -> str | None:
@@ -194,10 +194,11 @@ def file_problem(path: Path, limit: int) -> str | None:
 
 
 def _size_problem(size: int, limit: int) -> str | None:
-    return f"larger than {_size(limit)}" if size > limit else None
+    return f"larger than {size_text(limit)}" if size > limit else None
 
 
-def _size(limit: int) -> str:
+def size_text(limit: int) -> str:
+    """A size limit as messages give it: "16 MiB", "512 bytes"."""
     return f"{limit >> 20} MiB" if limit >= 1 << 20 else f"{limit} bytes"
 
 
@@ -219,7 +220,7 @@ def read_file_at_most(path: Path, limit: int) -> tuple[bytes | None, str | None]
         return None, f"cannot be read ({error.strerror or error})"
     if problem:
         return None, problem
-    return (data, None) if data is not None else (None, f"larger than {_size(limit)}")
+    return (data, None) if data is not None else (None, f"larger than {size_text(limit)}")
 
 
 def read_json_file(path: Path, limit: int) -> tuple[Any, str | None]:
@@ -242,6 +243,13 @@ def json_document(data: bytes) -> tuple[Any, str | None]:
         return None, f"line {error.lineno}, column {error.colno}: not JSON ({error.msg})"
     except RecursionError:
         return None, f"not JSON ({NESTED})"
+
+
+def json_type(value) -> str:
+    """The JSON name of a value's type: "object", "array", "string", "boolean", "null",
+    "number"."""
+    return {dict: "object", list: "array", str: "string", bool: "boolean",
+            type(None): "null"}.get(type(value), "number")
 
 
 def shown(value, width: int = 40) -> str:

@@ -412,3 +412,20 @@ def test_a_report_of_an_unfinished_run_says_so_in_its_pages_and_on_stderr(finish
     assert says in capsys.readouterr().err
     assert says in (run / "report.md").read_text() and says in (run / "report.html").read_text()
     assert "unfinished" not in (finished / "report.md").read_text()
+
+
+def test_a_merge_into_a_folder_an_eval_was_killed_in_before_its_first_write_finishes(
+        tmp_path, capsys):
+    """A folder holding only a lock and a write a kill cut short counts as new: the merge
+    moves its run there (it stuck there for good: the folder could not be removed)."""
+    shards = [tmp_path / f"s{i}" for i in (1, 2)]
+    for index, shard in enumerate(shards, start=1):
+        assert main(["eval", *RUN, "--shard", f"{index}/2", "--out", str(shard)]) == 0
+    out = tmp_path / "merged"
+    out.mkdir()
+    (out / ".lock").write_text("12345\n")
+    (out / "run.json.partial").write_text('{"policy": "no')
+    assert main(["merge", *map(str, shards), "--out", str(out)]) == 0
+    assert json.loads((out / "summary.json").read_text())["episodes"] == 2
+    assert not (out / "run.json.partial").exists()
+    assert not list(tmp_path.glob(".*.merging"))

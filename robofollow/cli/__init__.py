@@ -71,8 +71,21 @@ def _check_text(args) -> None:
                 try:
                     text.encode("utf-8")
                 except UnicodeEncodeError as error:
-                    byte = os.fsencode(text[error.start])[0]
-                    shown = os.fsencode(text).decode("utf-8", "backslashreplace")
-                    raise UsageError(f"{shown} (the {name} argument) is not UTF-8 text (byte "
-                                     f"0x{byte:02x}); RoboFollow records and shows the names "
-                                     "it is given as UTF-8: rename it") from None
+                    raise UsageError(f"{_as_given(text)} (the {name} argument) is not UTF-8 "
+                                     f"text ({_what(text[error.start])}); RoboFollow records "
+                                     "and shows the names it is given as UTF-8: rename it"
+                                     ) from None
+
+
+def _as_given(text: str) -> str:
+    """Text holding lone surrogates, shown with the bytes they stand for (\\xff)."""
+    try:
+        raw = text.encode("utf-8", "surrogateescape")
+    except UnicodeEncodeError:  # (a surrogate no byte stands for: main() given it)
+        raw = text.encode("utf-8", "backslashreplace")
+    return raw.decode("utf-8", "backslashreplace")
+
+
+def _what(surrogate: str) -> str:
+    code = ord(surrogate)
+    return f"byte 0x{code - 0xDC00:02x}" if 0xDC80 <= code <= 0xDCFF else f"U+{code:04X}"

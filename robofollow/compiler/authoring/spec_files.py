@@ -42,10 +42,8 @@ def spec_text(path: Path, folder: Path | None) -> str | SpecError:
     why = _why_not_read(path, folder)
     data = None
     if why is None:
-        try:
-            data = _read(path)
-        except OSError as error:
-            why = f"cannot read it: {error.strerror or error}"
+        data, why = read_file_at_most(path, MAX_SPEC_BYTES)  # (checked again once open: the
+        #   file may have been replaced since it was looked at)
     if data is None:
         return SpecError("unreadable", why, file=str(path), line=1, column=1)
     try:
@@ -71,20 +69,11 @@ def _why_not_read(path: Path, folder: Path | None) -> str | None:
     if stat.S_ISDIR(info.st_mode):
         return "a folder, not a spec file"
     if not_regular(info.st_mode):
-        return not_regular(info.st_mode)
+        return f"{not_regular(info.st_mode)}; it is not read"
     if info.st_size > MAX_SPEC_BYTES:
         return (f"{info.st_size} bytes, more than a spec file may hold ({MAX_SPEC_BYTES} "
                 "bytes)")
     return None
-
-
-def _read(path: Path | str) -> bytes:
-    """The bytes of a regular file (files.read_file_at_most: opened without blocking, and
-    checked again once open, as the file may have been replaced since it was looked at)."""
-    data, problem = read_file_at_most(Path(path), MAX_SPEC_BYTES)
-    if problem:
-        raise OSError(f"{path}: {problem}")
-    return data
 
 
 def split_lines(text: str) -> tuple[str, ...]:
@@ -106,11 +95,8 @@ class Sources:
 
 
 def _reread(file: str) -> tuple[str, ...]:
-    try:
-        data = _read(file)
-    except OSError:
-        return ()
-    return split_lines(data.decode("utf-8", errors="replace"))
+    data, _ = read_file_at_most(Path(file), MAX_SPEC_BYTES)
+    return () if data is None else split_lines(data.decode("utf-8", errors="replace"))
 
 
 def spec_error(code: str, message: str, where: Source, sources: Sources,

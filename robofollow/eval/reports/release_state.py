@@ -10,14 +10,14 @@ from pathlib import Path
 from robofollow import release
 from robofollow.errors import counted
 from robofollow.eval.running.run_benchmark import run_release
-from robofollow.eval.running.run_folder import RUN_FILE, summarised_episodes
+from robofollow.eval.running.run_folder import RUN_FILE, present, summarised_episodes
 from robofollow.eval.running.runner import EvalOptions
 from robofollow.eval.running.saved_run import load_options
 
 
 def runs_under(folder: Path) -> list[Path]:
     """Every run folder under `folder` (control arms included), in path order."""
-    return sorted(path.parent for path in folder.rglob(RUN_FILE) if path.is_file())
+    return sorted(path.parent for path in folder.rglob(RUN_FILE) if present(path))
 
 
 def state(options: EvalOptions) -> tuple[str, str]:

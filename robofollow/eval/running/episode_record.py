@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 from robofollow.eval.running.scores import episode_problem
 from robofollow.eval.statistics.metrics import MOTIONS
-from robofollow.files import number_problem, shown
+from robofollow.files import json_type, number_problem, shown
 
 Check = Callable[[object], str | None]  # what is wrong with a value ("is 3, not text"), or None
 
@@ -34,7 +34,7 @@ def _fraction(value) -> str | None:
     return number_problem(value, 0.0, 1.0)
 
 
-def _seconds(value) -> str | None:
+def _non_negative(value) -> str | None:
     return number_problem(value, 0.0)
 
 
@@ -95,9 +95,9 @@ OPTIONAL = {
     "seed": _or_none(_whole), "instruction": _text, "task_instruction": _text,
     "other_branch": _or_none(_flag), "stages": _list_of(_STAGE),
     "executed_behaviour": _or_none(_BEHAVIOUR), "steps": _or_none(_whole), "queries": _whole,
-    "clipped": _whole, "error": _or_none(_text), "seconds": _seconds,
+    "clipped": _whole, "error": _or_none(_text), "seconds": _non_negative,
     "observed": _list_of(_text), "hashes": _object({}, any_key=_text),
-    "start_tolerance_m": _seconds, "chance": _object({"IS": _fraction, "CR": _fraction}),
+    "start_tolerance_m": _non_negative, "chance": _object({"IS": _fraction, "CR": _fraction}),
     "followed_intent": _or_none(_fraction), "video": _or_none(_text),
     "did": _text, "first_failure": _or_none(_list_of(_text)),
 }
@@ -109,7 +109,7 @@ def record_problem(record) -> str | None:
     every field's type and range, the episode id's shape and its task, scene and level those
     of the record (the scores file's episode id checks, scores.py)."""
     if not isinstance(record, dict):
-        return f"a JSON {type(record).__name__}, not an episode record"
+        return f"a JSON {json_type(record)}, not an episode record"
     problem = _RECORD(record)
     if problem:
         return problem.removeprefix("has ")

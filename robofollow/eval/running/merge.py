@@ -26,6 +26,7 @@ from robofollow.eval.running.run_folder import (
     EvalOutputError,
     check_out,
     control_arms,
+    present,
     run_lock,
     safe_path,
 )
@@ -129,8 +130,8 @@ def merge(benchmark: Episodes, shards: list[Path], out: Path) -> tuple[dict, lis
     else:
         _check_new(out)
         scratch = safe_path(out.parent, f".{out.name}.merging")
-        with run_lock(scratch):
-            _check_new(out)  # (again, held: another merge may have finished it meanwhile)
+        with run_lock(scratch), run_lock(out):
+            _check_new(out)  # (again, held: another command may have written it meanwhile)
             _clear(scratch)
             for arm_out, files, _ in written:
                 _write(scratch / arm_out.relative_to(out), files)
@@ -141,7 +142,7 @@ def merge(benchmark: Episodes, shards: list[Path], out: Path) -> tuple[dict, lis
 def _check_new(out: Path) -> None:
     """A merged run goes to a new folder (or an empty one)."""
     check_out(out)
-    if (out / RUN_FILE).exists():
+    if present(out / RUN_FILE):
         raise MergeError(f"{out} already holds a run; merge writes a new run: choose another "
                          "--out")
 
@@ -158,12 +159,12 @@ def _clear(scratch: Path) -> None:
 
 
 def _move(scratch: Path, out: Path) -> None:
-    """The merged run, whole, into `out` (an empty folder there, with a lock of its own, is
-    replaced)."""
+    """The merged run, whole, into `out`, which holds at most what a new run's folder may
+    (check_out: its lock, held here, and writes a kill left unfinished), removed first."""
     try:
-        if out.is_dir():
-            (out / LOCK).unlink(missing_ok=True)
-            out.rmdir()
+        for leftover in out.iterdir():
+            leftover.unlink()
+        out.rmdir()
         os.rename(scratch, out)
     except OSError as error:
         raise EvalOutputError(f"cannot move the merged run from {scratch} to {out}: "

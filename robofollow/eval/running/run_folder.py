@@ -21,6 +21,7 @@ from robofollow.files import (
     file_problem,
     json_line,
     json_lines,
+    json_type,
     read_file_at_most,
     read_json_file,
     shown,
@@ -53,11 +54,6 @@ class RunInUseError(EvalRunError):
 class RunReadError(EvalRunError):
     """A folder that holds no evaluation run, or not the part of one that is asked for, or a
     file of it that is not as RoboFollow wrote it."""
-
-
-def json_type(value) -> str:
-    return {dict: "object", list: "array", str: "string", bool: "boolean",
-            type(None): "null"}.get(type(value), "number")
 
 
 def read_json_object(path: Path, what: str) -> dict:
@@ -112,7 +108,7 @@ def _scan(path: Path) -> tuple[list[dict], list[bytes], list[tuple[int, bytes, s
                            "a run this large is run in shards, eval --shard I/N)")
     whole = data[:data.rfind(b"\n") + 1]
     if len(whole) != len(data):
-        with open(safe_path(path.parent, path.name), "r+b") as f:
+        with open(in_place(path.parent, path.name), "r+b") as f:
             f.truncate(len(whole))
     records, lines, corrupt, seen = [], [], [], {}
     for line in json_lines(whole):
@@ -144,7 +140,7 @@ def drop_corrupt_lines(path: Path) -> list[dict]:
     records, lines, corrupt = _scan(path)
     if not corrupt:
         return records
-    side = safe_path(path.parent, DROPPED)
+    side = in_place(path.parent, DROPPED)
     partial_file = safe_path(path.parent, path.name + ".partial")
     try:
         with open(side, "ab") as f:
@@ -237,7 +233,7 @@ def run_lock(out: Path) -> Iterator[None]:
     process holds it. flock goes with its process, so a killed run's lock never blocks."""
     try:
         out.mkdir(parents=True, exist_ok=True)
-        fd = os.open(safe_path(out, LOCK), os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
+        fd = os.open(in_place(out, LOCK), os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW, 0o644)
     except OSError as error:
         raise EvalOutputError(f"cannot write in the run folder {out}: "
                               f"{error.strerror or error}") from None
@@ -274,7 +270,7 @@ def _unstarted(out: Path) -> bool:
     results = out / RESULTS
     return (present(out / RUN_FILE)
             and (not present(results) or results.stat().st_size == 0)
-            and not (out / SUMMARY).exists() and not (out / SCORES).exists())
+            and not present(out / SUMMARY) and not present(out / SCORES))
 
 
 def finished(out: Path) -> bool:
@@ -310,7 +306,7 @@ def check_whole(out: Path) -> None:
     """EvalRunError for a finished run whose results file holds fewer lines than its summary
     counts episodes (an emptied or replaced file): resuming it would run its episodes again
     over its scores. (Corrupt lines count: --drop-corrupt repairs those.)"""
-    if not (finished(out) and (out / RESULTS).is_file()):
+    if not (finished(out) and present(out / RESULTS)):
         return
     kept, counted = _lines(out / RESULTS), summarised_episodes(out)
     if counted is not None and kept < counted:
@@ -393,9 +389,8 @@ def write_text_file(path: Path, text: str) -> None:
 
 
 def safe_path(out: Path, *parts: str) -> Path:
-    """out/parts, refused where it or a folder on the way below `out` is a symbolic link, or
-    where it is a file hard-linked elsewhere (written in place, as a results file is appended
-    to, the other names would change too): no write leaves a run folder (or any --out)."""
+    """out/parts, refused where it or a folder on the way below `out` is a symbolic link: no
+    write follows a link out of a run folder (or any --out)."""
     path = out
     for part in parts:
         path = path / part
@@ -403,12 +398,20 @@ def safe_path(out: Path, *parts: str) -> Path:
             raise EvalOutputError(f"{path} is a symbolic link; RoboFollow writes only inside "
                                   f"{out} and never through a link: remove it, or choose "
                                   "another folder")
+    return path
+
+
+def in_place(out: Path, *parts: str) -> Path:
+    """safe_path for a file written in place (appended to, cut short, locked), refused too
+    where it is hard-linked elsewhere: its other names would change with it. (Files written
+    whole are renamed into place, which leaves other names as they were.)"""
+    path = safe_path(out, *parts)
     try:
-        info = os.lstat(path)
+        problem = _linked_elsewhere(os.lstat(path))
     except OSError:
         return path  # (not there yet)
-    if parts and _linked_elsewhere(info):
-        raise EvalOutputError(f"{path}: {_linked_elsewhere(info)}")
+    if problem:
+        raise EvalOutputError(f"{path}: {problem}")
     return path
 
 
@@ -431,4 +434,4 @@ def control_arms(run: Path) -> list[str]:
     if not folder.is_dir():
         return []
     return sorted(arm.name for arm in folder.iterdir()
-                  if (safe_path(run, CONTROLS, arm.name) / RUN_FILE).is_file())
+                  if present(safe_path(run, CONTROLS, arm.name) / RUN_FILE))

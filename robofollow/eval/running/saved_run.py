@@ -25,7 +25,6 @@ from robofollow.eval.running.run_folder import (
     RUN_FILE,
     SCORES,
     RunReadError,
-    json_type,
     present,
     read_json_object,
     read_results,
@@ -38,7 +37,7 @@ from robofollow.eval.running.scores import (
     read_scores,
     task_problem,
 )
-from robofollow.files import key_problem, shown
+from robofollow.files import json_type, key_problem, shown
 from robofollow.provenance import FIELDS as PROVENANCE_FIELDS
 from robofollow.provenance import NOTE
 
