@@ -227,3 +227,34 @@ def test_the_unknown_episode_hint_shows_an_id_of_the_benchmark():
     error = unknown_episode("demo/L1/nothing#r1", ["demo/L0/pick_red", "demo/L1/pick_red"])
     assert "(ids look like demo/L0/pick_red#r1)" in str(error)
     assert "scene1" not in str(error)
+
+
+# ---------------------------------------------------------------- a broken training layout
+
+ALONE = """    layout apart {
+        red_cube at (0.1, 0.0)
+        blue_cube at (-0.1, 0.0)
+        bowl at (0.0, -0.15)
+    }
+    task pick_red"""
+
+
+def test_a_typo_in_a_training_layout_beside_an_l1_layout_of_its_own_is_located(tmp_path,
+                                                                               capsys):
+    """An unknown body in the training layout, in a scene whose L1 rule names a layout not
+    derived from it: the typo's error (it was a KeyError traceback: the layout that looks
+    like a training one was sought among the layouts that could not be posed)."""
+    marked = edit("        red_cube at (-0.1, 0.0)", f"        {MARK}red_cub at (-0.1, 0.0)")
+    marked = marked.replace("    task pick_red", ALONE, 1).replace("layouts=(swapped)",
+                                                                  "layouts=(apart)")
+    assert_error(tmp_path, marked, "unknown-object",
+                 "no object named red_cub; did you mean 'red_cube'?", capsys)
+
+
+def test_an_error_in_a_layout_derived_from_a_broken_one_is_reported_with_it(tmp_path, capsys):
+    """Every problem at once: the derived layout's own typo is reported beside its base's."""
+    text = edit("        red_cube at (-0.1, 0.0)", "        red_cub at (-0.1, 0.0)").replace(
+        "swap red_cube blue_cube", "swap red_cube blu_cube")
+    status, _, err = compile_spec(tmp_path, text, capsys)
+    assert status == 1 and err.splitlines()[-1] == "2 errors in the specs", err
+    assert "no object named red_cub;" in err and "no object named blu_cube;" in err

@@ -131,8 +131,11 @@ class LayoutResolver:
             colours: dict[str, Colour] = {}
             if base is not None:
                 inherited = self.done[base]
-                if inherited is None:
-                    return self.fail(chain)
+                if inherited is None:  # its own names are checked still: every error at once
+                    for op in self.raw[layout].ops:
+                        self.names_known(op)
+                    self.done[layout], self.colours[layout] = None, {}
+                    continue
                 arrangement, colours = dict(inherited), dict(self.colours[base])
             # every op, every error
             applied = [self.apply(op, arrangement, colours) for op in self.raw[layout].ops]
@@ -149,7 +152,7 @@ class LayoutResolver:
         """Apply one operation to the arrangement (a recolour: to `colours`); False
         (reported, or already reported) when it fails."""
         kind, other = op.kind, op.other
-        if not (self.known(op.body) and (other is None or self.known(other))):
+        if not self.names_known(op):
             return False
         first = str(op.body)
         if kind in ("swap", "move", "remove", "put_on", "put_in", "recolor") \
@@ -190,6 +193,14 @@ class LayoutResolver:
                 return False
             del arrangement[first]
         return True
+
+    def names_known(self, op: LayoutOp) -> bool:
+        """Whether the bodies (and the point) an operation names exist; each that does not is
+        reported, with did-you-mean."""
+        known = self.known(op.body) and (op.other is None or self.known(op.other))
+        if known and op.kind in ("at", "move") and isinstance(op.position, Token):
+            return self.position(op.position, str(op.body)) is not None
+        return known
 
     def poses(self, arrangement: dict[str, Spot], layout: str,
               quiet: bool = False) -> dict[str, Placed] | None:

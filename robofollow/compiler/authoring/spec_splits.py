@@ -100,10 +100,12 @@ class SplitChecks(Checks):
             if rule.level in MOTION_LEVELS and rule.repeats == "refused":
                 for layout in rule.layouts:
                     levels.setdefault(layout, []).append(rule.level)
+        posed = [name for name in scene.training_layouts  # (a broken one has its error)
+                 if name in scene.layouts and name not in skip]
         for layout, refused in levels.items():
             if layout not in scene.layouts or layout in skip:
                 continue
-            same = look_alike(scene, layout, scene.training_layouts)
+            same = look_alike(scene, layout, posed)
             if same is None:
                 continue
             what = ("is a training layout" if same == layout else "looks the same as the "
