@@ -41,6 +41,11 @@ _UNSUPPORTED: tuple[tuple[Construct, tuple[str, ...]], ...] = (
       "sweep", "lower", "raise", "carry", "carrying", "bring", "fetch", "get", "pull",
       "pulling", "drag", "dragging", "fold", "cut", "wave", "shift", "transfer",
       "relocate", "return", "unstack", "balance", "draw", "write", "clean", "wash")),
+    (HANDOVER := Construct(
+        "handing an object from one arm to the other", "one arm places it where the other "
+        "reaches, then the other picks it up: 'use your left arm to place the red cube in "
+        "front of the bowl, then use your right arm to pick up the red cube'"),
+     ("handing", "handover", "handovers", "handoff", "hand-over", "hand-off")),
     (Construct("arranging several objects", "one step per object, in order: 'first ..., "
                "then ...'"),
      ("sort", "sorting", "arrange", "arranging", "line", "align", "aligning", "organize",
@@ -130,6 +135,16 @@ def unsupported(word: str) -> Construct | None:
     if word.endswith("'s") and len(word) > 2:
         return _POSSESSIVE
     return _INDEX.get(word)
+
+
+_AS_THE_ACTION = {"hand": HANDOVER, "pass": HANDOVER}  # words of the vocabulary ("hand" an
+#   arm, "pass" a route) that ask, where the action is expected, for one it does not cover
+
+
+def unsupported_action(word: str) -> Construct | None:
+    """The construct a word of the vocabulary asks for when it stands where the action
+    ('pick', 'place', ...) is expected, if the language does not support it."""
+    return _AS_THE_ACTION.get(word.lower())
 
 
 def unsupported_words() -> frozenset[str]:

@@ -14,6 +14,7 @@ from lark.lexer import Lexer
 from lark.parsers.lalr_analysis import Shift
 
 from robofollow.compiler.language import lf
+from robofollow.compiler.language.coverage import unsupported_action
 from robofollow.compiler.language.lark_tables import cached_lark
 from robofollow.compiler.language.lexicon import (
     VOCABULARY,
@@ -23,7 +24,12 @@ from robofollow.compiler.language.lexicon import (
 )
 from robofollow.compiler.language.semantics import Semantics
 from robofollow.compiler.language.syntax import ToSyntax
-from robofollow.errors import InstructionError, UngrammaticalError, UnknownWordError
+from robofollow.errors import (
+    InstructionError,
+    UngrammaticalError,
+    UnknownWordError,
+    UnsupportedConstructError,
+)
 from robofollow.resources import grammar_text
 
 # How an expected terminal is named in error messages (others list their words).
@@ -127,6 +133,12 @@ def _ungrammatical(token: WordToken, expected_terminals, text: str) -> Ungrammat
         message = ("the instruction is empty" if not text.strip()
                    else "the instruction ends too early")
         return UngrammaticalError(message, text=text, column=column, expected=tuple(expected))
+    construct = unsupported_action(token.text) if "PICK" in expected_terminals else None
+    if construct is not None:
+        return UnsupportedConstructError(
+            f"not supported: {construct.name} ({token.text!r}); say instead: "
+            f"{construct.instead}", text=text, column=token.column,
+            length=token.end_column - token.column)
     return UngrammaticalError(f"unexpected {token.text!r} here", text=text, column=token.column,
                               length=token.end_column - token.column, expected=tuple(expected))
 
