@@ -57,3 +57,13 @@ def test_without_training_tasks_nothing_is_in_the_repertoire():
     assert Repertoire(scene, {}).missing(pick("left", "yellow_block_1"), World(scene, "default"),
                                          compose=True) == \
         "pick left yellow_block_1: the scene has no checked training task"
+
+
+def test_a_push_at_an_untrained_place_names_where_it_starts_not_a_pick_location():
+    scene, repertoire = _scene1()
+    push = Behaviour(steps=(Step(action="push", arm="left", source="yellow_block_2",
+                                 target="red_cylinder"),))
+    message = repertoire.missing(push, _swapped(scene, "yellow_block_2", "green_sphere"),
+                                 compose=False)
+    assert message and "new push start: from the table at" in message, message
+    assert "pick location" not in message

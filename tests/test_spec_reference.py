@@ -225,3 +225,18 @@ def test_every_limit_is_listed_with_its_value(name):
     shown = re.split(r"\s*\|\s*", rows[0])[2]
     for number in _numbers(_limits()[name]):
         assert re.search(rf"(?<![\d.]){re.escape(number)}(?![\d.])", shown), (name, number)
+
+
+_CODE = re.compile(r'(?:\.error|\.warning|Error|unknown_name|spec_error|SpecError)\(\s*'
+                   r'"([a-z][a-z0-9-]+)"')  # an error's code, written where it is raised
+
+
+def test_every_error_code_the_compiler_raises_is_in_the_error_table():
+    """The codes written as literals where the compiler raises its errors (grounding's
+    `unsupported` was missing) are each in the page's table of codes by statement."""
+    source = Path(spec.__file__).resolve().parents[1]
+    codes = {code for path in source.rglob("*.py") for code in _CODE.findall(path.read_text())}
+    table = _doc()[_doc().index("| statement | codes |"):]
+    table = table[:table.index("\n\n")]
+    assert len(codes) > 30
+    assert sorted(code for code in codes if f"`{code}`" not in table) == []

@@ -127,6 +127,21 @@ def test_the_lock_is_rewritten_only_in_a_specs_folder_that_is_named(tmp_path, ca
     assert lock.read_bytes() == before and not (tmp_path / "out").exists()
 
 
+def test_an_unverified_split_is_never_pinned(tmp_path, capsys, verified):
+    """`--update-lock --no-verify` pinned a changed scene that was never verified: refused
+    before anything is compiled, the lock as it was."""
+    folder = _folder(tmp_path)
+    spec = folder / "scene2.rf"
+    spec.write_text(spec.read_text().replace("wordings=(referents) max=72",
+                                             "wordings=(referents) max=60"))
+    before = (folder / "splits.lock").read_bytes()
+    assert main(["compile", str(folder), "--out", str(tmp_path / "out"), "--update-lock",
+                 "--no-verify"]) == 2
+    assert "--update-lock pins only splits the expert verified" in capsys.readouterr().err
+    assert (folder / "splits.lock").read_bytes() == before and verified == []
+    assert not (tmp_path / "out").exists()
+
+
 @pytest.mark.parametrize("lock,why", [
     ('{"scenes": {"scene2": {"split": "abc", "tasks": "many"}}}', "scene 'scene2': 'tasks' must map levels"),
     ('{"scenes": ["scene2"]}', 'no "scenes" object'),

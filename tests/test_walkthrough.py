@@ -50,8 +50,9 @@ def test_the_readme_walkthrough_compiles_as_described(tmp_path):
     moved = {r.origin: r.reason for r in compiled.splits.rejected
              if r.layout == "scene2_7" and r.level == "L1" and "small_red_cube" in r.reason}
     assert len(moved) == 6 and all(reason.startswith("repertoire: ")
-                                   and ("new pick location" in reason
-                                        or "new put location" in reason)
+                                   and any(f"new {part}" in reason for part in (
+                                       "pick location", "put location", "push start",
+                                       "push end"))
                                    for reason in moved.values())
     assert "pick left small_red_cube: no training step moves alike; against the nearest, " \
            "pickup_blue_cylinder (pick left small_blue_cylinder on default), new pick location: " \

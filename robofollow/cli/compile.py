@@ -65,6 +65,9 @@ def cmd_compile(args) -> int:
         if args.no_verify:
             raise UsageError("--release freezes a verified build: leave out --no-verify")
         check_new(args.release)
+    if args.update_lock and args.no_verify:
+        raise UsageError("--update-lock pins only splits the expert verified: leave out "
+                         "--no-verify (the changed and new scenes are verified)")
     if args.update_lock and args.specs is None:
         raise UsageError("--update-lock rewrites SPECS/splits.lock: name the specs folder to "
                          "pin (without one it would be the built-in benchmark's, or ./specs)")

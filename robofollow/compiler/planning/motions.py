@@ -96,6 +96,12 @@ def _cm(point: Point) -> str:
     return "(" + ", ".join(f"{100 * v:.1f}" for v in point) + ") cm"
 
 
+def named(part: str, m: Motion) -> str:
+    """A part's name as a message gives it: a push's locations are where it starts and ends."""
+    pushed = {"pick location": "push start", "put location": "push end"}
+    return pushed.get(part, part) if m.action == "push" else part
+
+
 def shown(part: str, m: Motion) -> str:
     """One part of a motion, in words."""
     if part == "arm":
@@ -176,8 +182,8 @@ class Repertoire:
         nearest = trained.motions[at]
         parts = differences(m, nearest)
         which = f"step {index + 1} " if len(behaviour.steps) > 1 else ""
-        new = "; ".join(f"new {part}: {shown(part, m)} (trained: {shown(part, nearest)})"
-                        for part in parts)
+        new = "; ".join(f"new {named(part, m)}: {shown(part, m)} (trained: "
+                        f"{shown(part, nearest)})" for part in parts)
         return (f"{which}{describe_steps((behaviour.steps[index],))}: no training step moves "
                 f"alike; against the nearest, {trained.label} "
                 f"({describe_steps((trained.steps[at],))} on {trained.layout}), {new}")
