@@ -60,9 +60,9 @@ class Trajectory:
     @classmethod
     def load(cls, path: str | Path) -> "Trajectory":
         """Read a saved trajectory; TrajectoryError says what is wrong with a bad file."""
-        problem = _file_problem(Path(path))
+        problem = npz_problem(Path(path), MAX_TRAJECTORY_BYTES)
         if problem:
-            raise TrajectoryError(f"{path}: {problem}")
+            raise TrajectoryError(f"{path}: cannot read a trajectory: {problem}")
         try:
             with np.load(path, allow_pickle=False) as data:
                 missing = [k for k in ("bodies", "meta", *_ARRAYS) if k not in data.files]
@@ -93,20 +93,20 @@ class Trajectory:
             raise TrajectoryError(f"{where}: the trajectory has no frames")
 
 
-def _file_problem(path: Path) -> str | None:
-    """Why a file is not read as a trajectory (not a regular file of at most
-    MAX_TRAJECTORY_BYTES, not a zip archive, or arrays that unpack to more), or None. (An
-    array's header may still claim more than its data: reading it then fails.)"""
-    problem = file_problem(path, MAX_TRAJECTORY_BYTES)
+def npz_problem(path: Path, limit: int) -> str | None:
+    """Why a .npz file is not handed to np.load: it is not a regular file of at most `limit`
+    bytes (file_problem), not a zip archive, or its arrays unpack to more than `limit` (whole
+    MiB); None when it may be. (An array's header may still claim more than its data: loading
+    it then fails.)"""
+    problem = file_problem(path, limit)
     if problem:
-        return f"cannot read a trajectory: {problem}"
+        return problem
     try:
         with zipfile.ZipFile(path) as archive:
             unpacked = sum(info.file_size for info in archive.infolist())
     except (OSError, zipfile.BadZipFile):
-        return "not a .npz trajectory (not a zip archive)"
-    return (f"cannot read a trajectory: its arrays unpack to more than "
-            f"{MAX_TRAJECTORY_BYTES >> 20} MiB" if unpacked > MAX_TRAJECTORY_BYTES else None)
+        return "not a .npz file (not a zip archive)"
+    return f"its arrays unpack to more than {limit >> 20} MiB" if unpacked > limit else None
 
 
 _ARRAYS = ("movable", "time", "state", "action", "positions", "quaternions", "ee_positions",

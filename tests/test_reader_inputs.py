@@ -32,12 +32,15 @@ from robofollow import trajectory
 from robofollow.audit.task_list import read_task_list
 from robofollow.benchmark.splits_lock import read_lock
 from robofollow.cli import main
+from robofollow.data.check import check
 from robofollow.data.generate import _manifest
+from robofollow.data.lerobot import EXTRA_EPISODE_FIELDS, VIDEO_KEYS
 from robofollow.errors import RoboFollowError
 from robofollow.eval.running.run_folder import read_results, summarised_episodes
 from robofollow.eval.running.saved_run import read_run_file
 from robofollow.learn import checkpoint
 from robofollow.learn.demos import read_demonstrations
+from robofollow.learn.train import resumed_options
 from robofollow.resources import builtin_specs
 from robofollow.vqa.grade import grade
 from tests.cli_helpers import run
@@ -78,16 +81,30 @@ def _damaged(path: Path, damage: str) -> None:
 
 class Inputs:
     """What several rows build on, made once a module: a generated dataset (LeRobot v2.1, one
-    demonstration of TASK) and the expert's trajectory of EPISODE."""
+    demonstration of TASK; and as v3.0 and HDF5), a finished run and the expert's trajectory
+    of EPISODE."""
 
     def __init__(self, folder: Path):
         self.folder = folder
 
     @cached_property
     def dataset(self) -> Path:
-        out = self.folder / "dataset"
+        return self._generate("dataset")
+
+    @cached_property
+    def v30(self) -> Path:
+        """The same demonstration as a LeRobot v3.0 dataset, of small images."""
+        return self._generate("v30", "--format", "lerobot-v3.0", "--image-size", "32x24")
+
+    @cached_property
+    def hdf5(self) -> Path:
+        """The same demonstration as an HDF5 dataset, of small images."""
+        return self._generate("hdf5", "--format", "hdf5", "--image-size", "32x24")
+
+    def _generate(self, name: str, *options: str) -> Path:
+        out = self.folder / name
         assert main(["generate", "--out", str(out), "--tasks", TASK, "--episodes-per-task", "1",
-                     "--workers", "1", "--quiet"]) == 0
+                     "--workers", "1", "--quiet", *options]) == 0
         return out
 
     @cached_property
@@ -134,6 +151,13 @@ def _optimizer(tmp: Path, inputs: Inputs) -> tuple[Path, list[str]]:
     checkpoint.save(folder, loaded, {"step": np.array(1), **moments})
     return folder / "optimizer.npz", ["train", str(dataset), "--out", str(folder), "--resume",
                                       "--no-cache", "--quiet"]
+
+
+def _resumed(tmp: Path, inputs: Inputs) -> tuple[Path, list[str]]:
+    """_optimizer's checkpoint, whose policy.json `train --resume` reads its training record
+    from: the options and the wall time spent."""
+    path, argv = _optimizer(tmp, inputs)
+    return path.parent / "policy.json", argv
 
 
 TASK_LINE = {"id": "a", "scene": "scene2", "level": "L2", "layout": "default",
@@ -186,10 +210,11 @@ def _training_file(name: str):
 
 
 def _checked_file(name: str, version: str = "v2.1"):
-    """A row's input: a copy of the dataset (as `version` where v3.0: its info.json and
-    meta/tasks.parquet) whose `name` `dataset check` reads."""
+    """A row's input: a copy of the dataset (the HDF5 one where `version` is "hdf5"; as v3.0
+    where it is "v3.0": its info.json and meta/tasks.parquet) whose `name` `dataset check`
+    reads."""
     def make(tmp: Path, inputs: Inputs) -> tuple[Path, list[str]]:
-        dataset = _copy(inputs.dataset, tmp / "dataset")
+        dataset = _copy(inputs.hdf5 if version == "hdf5" else inputs.dataset, tmp / "dataset")
         if version == "v3.0":
             info = json.loads((dataset / "meta" / "info.json").read_text())
             (dataset / "meta" / "info.json").write_text(json.dumps(
@@ -198,6 +223,35 @@ def _checked_file(name: str, version: str = "v2.1"):
                            dataset / "meta" / "tasks.parquet")
         return dataset / name, ["dataset", "check", str(dataset)]
     return make
+
+
+def _unit(tmp: Path, inputs: Inputs) -> tuple[Path, list[str]]:
+    """A generation interrupted once its one unit was recorded (the unit made again from the
+    dataset): `generate --resume` writes the dataset from the unit's arrays.npz."""
+    dataset, out = inputs.dataset, tmp / "out"
+    unit = out / ".work" / "units" / TASK / "0000"
+    unit.mkdir(parents=True)
+    manifest = json.loads((dataset / "manifest.json").read_text())
+    (out / ".work" / "options.json").write_text(json.dumps(manifest["options"]))
+    record = json.loads((dataset / "meta" / "episodes.jsonl").read_text())
+    stats = json.loads((dataset / "meta" / "episodes_stats.jsonl").read_text())["stats"]
+    images = {key: {name: value[0] if name == "count" else [v[0][0] for v in value]
+                    for name, value in stats[key].items()} for key in VIDEO_KEYS}
+    (unit / "demo.json").write_text(json.dumps({**manifest["demos"][0], **record,
+                                                "image_stats": images}))
+    frames = pq.read_table(dataset / FRAMES)
+    np.savez(unit / "arrays.npz", **{
+        name: np.array(frames.column(column).to_pylist(), np.float32)
+        for name, column in (("state", "observation.state"), ("action", "action"),
+                             ("environment_state", "observation.environment_state"))})
+    for key in VIDEO_KEYS:
+        shutil.copy(dataset / f"videos/chunk-000/{key}/episode_000000.mp4", unit / f"{key}.mp4")
+    return unit / "arrays.npz", _resume_generation(out)
+
+
+def _resume_generation(out: Path) -> list[str]:
+    return ["generate", "--out", str(out), "--resume", "--tasks", TASK, "--episodes-per-task",
+            "1", "--workers", "1", "--quiet"]
 
 
 def _generated(name: str):
@@ -212,8 +266,7 @@ def _generated(name: str):
             (out / ".work" / "options.json").write_text(json.dumps(manifest["options"]))
         if name != ".work/options.json":
             (out / name).write_text(json.dumps(manifest))
-        return out / name, ["generate", "--out", str(out), "--resume", "--tasks", TASK,
-                            "--episodes-per-task", "1", "--workers", "1", "--quiet"]
+        return out / name, _resume_generation(out)
     return make
 
 
@@ -286,6 +339,25 @@ def _read_demonstrations(path: Path):
 # the fields of meta/info.json that training does not read
 INFO_NOT_READ = ("robot_type", "total_*", "data_path", "splits", "splits.*", "features.*")
 
+# the fields of a checkpoint's training record that `train --resume` does not read
+TRAINING_NOT_READ = tuple(f"training.{name}" for name in (
+    "episodes", "val_episodes", "frames", "cores", "steps", "val_loss", "loss"))
+
+# the fields of meta/info.json that `dataset check` does not check: LeRobot leaves them free
+# (and the null names of a scalar feature, whose other type here is an object, as LeRobot's
+# names may be)
+CHECK_INFO_NOT_READ = ("robot_type", "splits", "splits.*", "features.*.info", "features.*.info.*",
+                       "features.*.names.*", "features.timestamp.names", "features.*index.names")
+FRAMES = "data/chunk-000/episode_000000.parquet"  # the dataset's one episode's frames
+
+
+def _dataset_check(path: Path) -> None:
+    """`dataset check` of the dataset whose meta/ folder holds `path`: its findings raised."""
+    report = check(path.parent.parent)
+    if not report.ok:
+        raise RoboFollowError("; ".join(report.errors))
+
+
 SUMMARY_NOT_READ = ("policy", "instruction_mode", "observed", "splits", "splits.*", "cells",
                     "cells.*", "avg", "avg.*", "references", "references.*",
                     "policy_failures", "policy_failures.*")  # a report recomputes the summary:
@@ -305,21 +377,32 @@ READERS = [
            free=("training.*",)),  # recorded (train --resume reads its options)
     Reader("checkpoint params.npz", _in_checkpoint("params.npz")),
     Reader("checkpoint optimizer.npz", _optimizer),
+    Reader("train --resume policy.json", _resumed,
+           damages=(),  # (checkpoint.load reads it, damaged: "checkpoint policy.json")
+           read=lambda path: resumed_options(path.parent, path.parent.parent / "dataset", {}),
+           free=TRAINING_NOT_READ),
     Reader("task list", _task_list, read=read_task_list),
     Reader("splits.lock", _splits_lock, read=read_lock),
     Reader("training meta/info.json", _training_file("meta/info.json"),
            read=_read_demonstrations, free=INFO_NOT_READ),
     Reader("training meta/episodes.jsonl", _training_file("meta/episodes.jsonl"),
            read=_read_demonstrations, free=("scene", "layout", "seed", "spec_digest")),
-    Reader("training frames", _training_file("data/chunk-000/episode_000000.parquet")),
+    Reader("training frames", _training_file(FRAMES)),
     Reader("training video", _training_file(
         "videos/chunk-000/observation.images.cam_high/episode_000000.mp4")),
     Reader("dataset check JSON", _checked_file("meta/info.json"), named="info.json",
-           report=True),
+           report=True, read=_dataset_check, free=CHECK_INFO_NOT_READ),
     Reader("dataset check JSON Lines", _checked_file("meta/episodes.jsonl"),
-           named="episodes.jsonl", report=True),
+           named="episodes.jsonl", report=True, read=_dataset_check,
+           free=EXTRA_EPISODE_FIELDS),  # RoboFollow's own, beside LeRobot's
     Reader("dataset check parquet", _checked_file("meta/tasks.parquet", "v3.0"),
            named="meta/tasks.parquet", report=True),
+    # (of the damages, those that pyarrow and h5py do not refuse themselves: pyarrow reads a
+    #   folder as a dataset of parquet files, h5py waits on a FIFO)
+    Reader("dataset check frames", _checked_file(FRAMES), damages=("folder",), named=FRAMES,
+           report=True),
+    Reader("dataset check HDF5", _checked_file("data/episode_000000.hdf5", "hdf5"),
+           damages=("fifo", "folder"), named="data/episode_000000.hdf5", report=True),
     Reader("generate manifest.json", _generated("manifest.json"),
            read=lambda path: _manifest(path.parent),
            free=("generator", "demos", "demos.*", "options.*")),
@@ -328,6 +411,8 @@ READERS = [
     # a unit's demo.json that is not a regular file is not taken for one: it is recorded again
     Reader("generate demo.json", _generated(f".work/units/{TASK}/0000/demo.json"),
            damages=("oversized",)),
+    Reader("generate arrays.npz", _unit,
+           damages=("oversized", "fifo", "device")),  # (np.load refuses a folder itself)
     Reader("vqa answers", _answers, read=grade,
            free=("prediction", "question")),  # an answer in any form; shown as given
     Reader("trajectory", _trajectory),
@@ -437,10 +522,15 @@ def test_a_damaged_file_is_refused_in_one_line(cases, name, damage):
         return
     assert done.returncode in (1, 2), (done.returncode, done.stdout, done.stderr)
     named = reader.named or str(damaged[name, damage])
-    if reader.report:  # one finding names it
-        assert [named in line for line in done.stdout.splitlines()].count(True) == 1, done.stdout
+    if reader.report:
+        assert _one_finding(done.stdout, named), done.stdout
     else:
         assert done.stderr.count("\n") == 1 and named in done.stderr, done.stderr
+
+
+def _one_finding(report: str, named: str) -> bool:
+    """Whether one finding of a command's report, and one only, names the file."""
+    return [named in line for line in report.splitlines()].count(True) == 1
 
 
 # -- a value of the wrong type in every field ---------------------------------------------------
@@ -504,10 +594,37 @@ def test_a_value_of_the_wrong_type_is_refused_in_one_line(tmp_path, inputs, caps
             _reads(reader, path, where)
             continue
         refused.append(where)
-        status, _, err = run(capsys, *argv)
-        assert status in (1, 2) and err.count("\n") == 1 and str(path) in err, (where, err)
+        status, out, err = run(capsys, *argv)
+        if reader.report:
+            assert status == 1 and _one_finding(out, reader.named), (where, out, err)
+        else:
+            assert status in (1, 2) and err.count("\n") == 1 and str(path) in err, (where, err)
     unused = [pattern for pattern in reader.free if not any(_matched(w, (pattern,)) for w in free)]
     assert refused and not unused, (refused, unused)
+
+
+V30_ROWS = "meta/episodes/chunk-000/file-000.parquet"
+
+
+def test_a_v30_episode_row_of_the_wrong_type_is_one_finding(tmp_path, inputs):
+    """The v3.0 episode table's columns (statistics apart: check_stats reads any value), each
+    of another type in turn: `dataset check` names the table once, or passes over a column it
+    does not read."""
+    table = pq.read_table(inputs.v30 / V30_ROWS)
+    assert check(inputs.v30).ok
+    free = (*EXTRA_EPISODE_FIELDS, "meta/episodes/*")  # (LeRobot's index of the row's file)
+    for index, name in enumerate(table.column_names):
+        if name.startswith("stats/"):
+            continue
+        wrong = [7 if pa.types.is_string(table.schema.field(name).type) else "wrong"]
+        root = _copy(inputs.v30, tmp_path / str(index))
+        pq.write_table(table.set_column(index, name, pa.array(wrong * table.num_rows)),
+                       root / V30_ROWS)
+        errors = check(root).errors
+        if _matched(name, free):
+            assert not errors, (name, errors)
+        else:
+            assert [e.startswith("meta/episodes") for e in errors].count(True) == 1, (name, errors)
 
 
 def _matched(where: str, patterns: tuple[str, ...]) -> bool:
@@ -524,7 +641,21 @@ def _reads(reader: Reader, path: Path, where: str) -> None:
     try:
         reader.read(path)
     except RoboFollowError as error:
-        assert str(path) not in str(error), (where, str(error))
+        assert (reader.named or str(path)) not in str(error), (where, str(error))
+
+
+@pytest.mark.parametrize("expected, field", [
+    ({"type": "object"}, "expected.object"),
+    ({"type": "color"}, "expected.color"),
+    ({"type": "sides"}, "expected.objects"),
+    ({"type": "sides", "objects": [{"color": "red", "kind": "cube"}]}, "expected.sides"),
+])
+def test_an_expected_answer_without_what_its_type_names_is_refused(tmp_path, capsys, expected,
+                                                                   field):
+    path = tmp_path / "answers.jsonl"
+    path.write_text(json.dumps({**ANSWER, "expected": expected}) + "\n")
+    status, _, err = run(capsys, "vqa", "score", str(path))
+    assert status == 1 and err.count("\n") == 1 and f"{path}:1: {field} is" in err, err
 
 
 # -- archives whose arrays claim more than they may hold ---------------------------------------

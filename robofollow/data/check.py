@@ -21,16 +21,28 @@ import pyarrow.parquet as pq
 
 from robofollow.data import hdf5_export, lerobot_v21, lerobot_v30
 from robofollow.data.check_parts import (
+    EPISODE_KINDS,
+    MAX_HDF5_BYTES,
+    MAX_PARQUET_BYTES,
+    NUMBER,
+    STATS_KINDS,
+    TASK_KINDS,
+    TEXT,
     TIME_TOLERANCE,
+    WHOLE,
+    WHOLES,
     WIDTH,
+    Kind,
     Report,
     check_frames,
     check_info,
+    check_rows,
     check_sequence,
     check_stats,
     check_stored,
     check_totals,
     check_video,
+    kind_problem,
     load_json,
     load_jsonl,
     read_parquets,
@@ -38,6 +50,7 @@ from robofollow.data.check_parts import (
     vector_widths,
 )
 from robofollow.data.lerobot import VIDEO_KEYS
+from robofollow.files import file_problem
 from robofollow.sim.cameras import CAMERA_NAMES
 from robofollow.sim.objects import FLAT as OBJECTS_WIDTH
 
@@ -67,20 +80,33 @@ def check(root: Path) -> Report:
 
 # -- LeRobot, shared -------------------------------------------------------------------------
 
+def _read_frames(root: Path, name: str, where: str, report: Report) -> pa.Table | None:
+    """The frames in the dataset's file `name` (an episode's, v2.1; a file of episodes',
+    v3.0): a parquet file of at most MAX_PARQUET_BYTES; else None, reported at `where`."""
+    problem = file_problem(root / name, MAX_PARQUET_BYTES)
+    if not problem:
+        try:
+            return pq.read_table(root / name)
+        except (OSError, pa.ArrowException) as error:
+            problem = str(error)
+    report.error(where, f"cannot read {name}: {problem}")
+    return None
+
+
 # -- LeRobot v2.1 ----------------------------------------------------------------------------
 
 def _check_v21(root: Path, info: dict, report: Report) -> None:
     features = check_info(info, report, ("video_path", "chunks_size", "total_chunks"))
     vectors = vector_widths(features)
     meta = root / "meta"
-    episodes = load_jsonl(meta / "episodes.jsonl", report)
-    tasks = load_jsonl(meta / "tasks.jsonl", report)
-    stats = {r.get("episode_index"): r.get("stats", {})
-             for r in load_jsonl(meta / "episodes_stats.jsonl", report)}
-    check_sequence([t.get("task_index") for t in tasks], "meta/tasks.jsonl", "task indices",
+    episodes = load_jsonl(meta / "episodes.jsonl", report, EPISODE_KINDS)
+    tasks = load_jsonl(meta / "tasks.jsonl", report, TASK_KINDS)
+    stats = {r["episode_index"]: r["stats"]
+             for r in load_jsonl(meta / "episodes_stats.jsonl", report, STATS_KINDS)}
+    check_sequence([t["task_index"] for t in tasks], "meta/tasks.jsonl", "task indices",
                     report)
-    task_index = {t.get("task"): t.get("task_index") for t in tasks}
-    if not check_sequence([e.get("episode_index") for e in episodes], "meta/episodes.jsonl",
+    task_index = {t["task"]: t["task_index"] for t in tasks}
+    if not check_sequence([e["episode_index"] for e in episodes], "meta/episodes.jsonl",
                            "episode indices", report) or report.errors:
         return
     check_totals(info, [e["length"] for e in episodes], report, len(tasks))
@@ -88,15 +114,13 @@ def _check_v21(root: Path, info: dict, report: Report) -> None:
     for record in episodes:
         index, length = record["episode_index"], record["length"]
         where = f"episode {index}"
-        if len(record.get("tasks", [])) != 1 or record["tasks"][0] not in task_index:
-            report.error(where, f"tasks {record.get('tasks')} are not one task of tasks.jsonl")
+        if len(record["tasks"]) != 1 or record["tasks"][0] not in task_index:
+            report.error(where, f"tasks {record['tasks']} are not one task of tasks.jsonl")
             continue
         chunk = index // chunk_size
-        path = root / info["data_path"].format(episode_chunk=chunk, episode_index=index)
-        try:
-            table = pq.read_table(path)
-        except (OSError, pa.ArrowException) as error:
-            report.error(where, f"cannot read {path.relative_to(root)}: {error}")
+        table = _read_frames(root, info["data_path"].format(episode_chunk=chunk,
+                                                            episode_index=index), where, report)
+        if table is None:
             start += length
             continue
         arrays = check_frames(table, where, index, length, start,
@@ -118,6 +142,13 @@ def _check_v21(root: Path, info: dict, report: Report) -> None:
 
 # -- LeRobot v3.0 ----------------------------------------------------------------------------
 
+# the fields of an episode's row that the check reads (LeRobot's; the statistics apart)
+V30_ROW_KINDS = {**EPISODE_KINDS, "dataset_from_index": WHOLE, "dataset_to_index": WHOLE,
+                 "data/chunk_index": WHOLE, "data/file_index": WHOLE,
+                 **{f"videos/{key}/{field}": kind for key in VIDEO_KEYS for field, kind in (
+                     ("chunk_index", WHOLE), ("file_index", WHOLE),
+                     ("from_timestamp", NUMBER), ("to_timestamp", NUMBER))}}
+
 def _check_v30(root: Path, info: dict, report: Report) -> None:
     features = check_info(info, report, ("video_path", "chunks_size"))
     vectors = vector_widths(features)
@@ -132,8 +163,9 @@ def _check_v30(root: Path, info: dict, report: Report) -> None:
     check_sequence([t["task_index"] for t in tasks], "meta/tasks.parquet", "task indices",
                     report)
     task_index = {t["task"]: t["task_index"] for t in tasks}
-    if not check_sequence([r["episode_index"] for r in rows], "meta/episodes",
-                           "episode indices", report) or report.errors:
+    if not check_rows(rows, "meta/episodes", V30_ROW_KINDS, report) or not check_sequence(
+            [r["episode_index"] for r in rows], "meta/episodes", "episode indices", report) \
+            or report.errors:
         return
     check_totals(info, [r["length"] for r in rows], report, len(tasks))
     fps, data_files, video_times = info["fps"], {}, {}
@@ -150,10 +182,8 @@ def _check_v30(root: Path, info: dict, report: Report) -> None:
         name = info["data_path"].format(chunk_index=row["data/chunk_index"],
                                         file_index=row["data/file_index"])
         if name not in data_files:
-            try:
-                data_files[name] = pq.read_table(root / name)
-            except (OSError, pa.ArrowException) as error:
-                report.error(where, f"cannot read {name}: {error}")
+            data_files[name] = _read_frames(root, name, where, report)
+            if data_files[name] is None:
                 return
         table = data_files[name]  # a file holds consecutive frames: slice the episode out
         offset = row["dataset_from_index"] - (table.column("index")[0].as_py()
@@ -195,20 +225,33 @@ def _check_v30(root: Path, info: dict, report: Report) -> None:
 
 # -- HDF5 ------------------------------------------------------------------------------------
 
+HDF5_INFO_KINDS = {"image_shape": Kind(lambda value: WHOLES.test(value) and len(value) == 3,
+                                       "a list of 3 whole numbers")}
+HDF5_EPISODE_KINDS = {"episode_index": WHOLE, "file": TEXT, "length": WHOLE}
+
+
 def _check_hdf5(root: Path, info: dict, report: Report) -> None:
     if info.get("format") != hdf5_export.VERSION:
         report.error("info.json", f"format {info.get('format')!r} is not "
                      f"{hdf5_export.VERSION}")
         return
-    episodes = load_jsonl(root / "episodes.jsonl", report)
-    if not check_sequence([e.get("episode_index") for e in episodes], "episodes.jsonl",
-                           "episode indices", report):
+    problem = kind_problem(info, HDF5_INFO_KINDS, required=True)
+    if problem:
+        report.error("info.json", problem)
+        return
+    episodes = load_jsonl(root / "episodes.jsonl", report, HDF5_EPISODE_KINDS)
+    if not check_sequence([e["episode_index"] for e in episodes], "episodes.jsonl",
+                           "episode indices", report) or report.errors:
         return
     height, width, _ = info["image_shape"]
     lengths = []
     for record in episodes:
         where = f"episode {record['episode_index']}"
         lengths.append(record["length"])
+        problem = file_problem(root / record["file"], MAX_HDF5_BYTES)
+        if problem:
+            report.error(where, f"cannot read {record['file']}: {problem}")
+            continue
         try:
             with h5py.File(root / record["file"], "r") as h5:
                 widths = {"action": WIDTH, "observations/qpos": WIDTH,

@@ -3,8 +3,10 @@ LeRobot's two layouts share (info.json, episode frames, statistics, videos, tota
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import av
 import numpy as np
@@ -18,6 +20,7 @@ from robofollow.data.stats import BINS, QUANTILE_KEYS, array_stats
 from robofollow.files import (
     file_problem,
     json_lines,
+    number_problem,
     read_file_at_most,
     read_json_file,
     shown,
@@ -44,6 +47,54 @@ MAX_JSON_BYTES = 16 * 1024 * 1024
 MAX_JSONL_BYTES = 1 << 30
 MAX_PARQUET_BYTES = 10 * lerobot_v30.DATA_FILE_MB << 20
 MAX_VIDEO_BYTES = 4 * lerobot_v30.VIDEO_FILE_MB << 20
+MAX_HDF5_BYTES = 2 << 30  # an HDF5 episode: about 35 KB a frame at 320x240 (4.3 MB for a
+#   123-step pick-up), 0.7 MB a frame uncompressed
+
+
+@dataclass(frozen=True)
+class Kind:
+    """What a field holds: whether a value is of it (`test`), and `what` it is, in words."""
+
+    test: Callable[[Any], bool]
+    what: str
+
+
+def _whole(value, low: int = 0) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool) and value >= low
+
+
+TEXT = Kind(lambda value: isinstance(value, str), "a string")
+TEXTS = Kind(lambda value: isinstance(value, list) and all(isinstance(v, str) for v in value),
+             "a list of strings")
+WHOLE = Kind(_whole, "a whole number from 0")
+WHOLES = Kind(lambda value: isinstance(value, list) and all(map(_whole, value)),
+              "a list of whole numbers from 0")
+NUMBER = Kind(lambda value: number_problem(value) is None, "a finite number")
+OBJECT = Kind(lambda value: isinstance(value, dict), "an object")
+NAMES = Kind(lambda value: value is None or isinstance(value, list | dict),
+             "null, a list or an object")  # a feature's names: LeRobot writes all three
+# the fields of info.json, of a feature in it, and of the records of LeRobot's JSON Lines files
+INFO_KINDS = {"fps": Kind(lambda value: NUMBER.test(value) and value > 0, "a positive number"),
+              "total_episodes": WHOLE, "total_frames": WHOLE, "total_tasks": WHOLE,
+              "total_videos": WHOLE, "total_chunks": WHOLE,
+              "chunks_size": Kind(lambda value: _whole(value, 1), "a whole number from 1"),
+              "data_path": TEXT, "video_path": TEXT, "features": OBJECT}
+FEATURE_KINDS = {"dtype": TEXT, "shape": WHOLES, "names": NAMES}
+EPISODE_KINDS = {"episode_index": WHOLE, "tasks": TEXTS, "length": WHOLE}
+TASK_KINDS = {"task_index": WHOLE, "task": TEXT}
+STATS_KINDS = {"episode_index": WHOLE, "stats": OBJECT}
+
+
+def kind_problem(data: dict, kinds: dict[str, Kind], required: bool = False) -> str | None:
+    """The first of `kinds`' fields that `data` holds with a value not of its kind ('fps is
+    "a", not a positive number'), or, `required`, lacks ("no 'fps'"); None when there is none."""
+    for key, kind in kinds.items():
+        if key not in data:
+            if required:
+                return f"no {key!r}"
+        elif not kind.test(data[key]):
+            return f"{key} is {shown(data[key])}, not {kind.what}"
+    return None
 
 
 @dataclass
@@ -90,21 +141,35 @@ def load_json(path: Path, report: Report) -> dict | None:
     return data
 
 
-def load_jsonl(path: Path, report: Report) -> list[dict]:
-    """The objects of a JSON Lines file (at most MAX_JSONL_BYTES); each other line is
-    reported."""
+def load_jsonl(path: Path, report: Report, kinds: dict[str, Kind]) -> list[dict]:
+    """The records of a JSON Lines file (at most MAX_JSONL_BYTES): objects with each of
+    `kinds`' fields, of its kind. Each line that is not one is reported, and the file then
+    read as no records."""
     data, problem = read_file_at_most(path, MAX_JSONL_BYTES)
     if problem:
         report.error(path.name, f"unreadable: {problem}")
         return []
-    records = []
+    records, complete = [], True
     for line in json_lines(data):
-        if line.problem or not isinstance(line.value, dict):
-            report.error(f"{path.name}:{line.number}:{line.column or 1}",
-                         line.problem or f"{shown(line.value)} is not a JSON object")
-        else:
-            records.append(line.value)
-    return records
+        problem = line.problem or (kind_problem(line.value, kinds, required=True)
+                                   if isinstance(line.value, dict) else
+                                   f"{shown(line.value)} is not a JSON object")
+        if problem:
+            report.error(f"{path.name}:{line.number}:{line.column or 1}", problem)
+            complete = False
+        records.append(line.value)
+    return records if complete else []
+
+
+def check_rows(rows: list[dict], where: str, kinds: dict[str, Kind], report: Report) -> bool:
+    """Whether each row of a table has each of `kinds`' fields, of its kind; the first that
+    has not is reported."""
+    for number, row in enumerate(rows):
+        problem = kind_problem(row, kinds, required=True)
+        if problem:
+            report.error(where, f"row {number}: {problem}")
+            return False
+    return True
 
 
 def vector_widths(features: dict) -> dict[str, int]:
@@ -115,14 +180,16 @@ def vector_widths(features: dict) -> dict[str, int]:
 
 
 def check_info(info: dict, report: Report, required: tuple[str, ...]) -> dict:
-    """The feature schema and top-level fields; returns the features (or {})."""
+    """The feature schema and top-level fields; returns the features (or {}: a field of the
+    wrong type is the one finding)."""
     for key in ("robot_type", "fps", "total_episodes", "total_frames", "total_tasks",
                 "data_path", "features") + required:
         if key not in info:
             report.error("meta/info.json", f"missing {key!r}")
-    fps = info.get("fps")
-    if not isinstance(fps, int | float) or fps <= 0:
-        report.error("meta/info.json", f"fps must be a positive number, got {fps!r}")
+    problem = _info_problem(info)
+    if problem:
+        report.error("meta/info.json", problem)
+        return {}
     features = info.get("features", {})
     for key, width in vector_widths(features).items():
         feature = features.get(key)
@@ -143,6 +210,20 @@ def check_info(info: dict, report: Report, required: tuple[str, ...]) -> dict:
         if feature.get("dtype") != "video" or len(shape) != 3 or shape[2] != 3:
             report.error("meta/info.json", f"{key} must be a video feature of shape [H, W, 3]")
     return features
+
+
+def _info_problem(info: dict) -> str | None:
+    """The first field of info.json, or of a feature in it, of the wrong kind, or None."""
+    problem = kind_problem(info, INFO_KINDS)
+    if problem:
+        return problem
+    for key, feature in info.get("features", {}).items():
+        if not isinstance(feature, dict):
+            return f"features.{key} is {shown(feature)}, not {OBJECT.what}"
+        problem = kind_problem(feature, FEATURE_KINDS)
+        if problem:
+            return f"features.{key}.{problem}"
+    return None
 
 
 def vector_column(column: pa.ChunkedArray, width: int) -> bool:

@@ -3,6 +3,7 @@ episode list (one per demonstration and instruction) and the per-episode statist
 
 from __future__ import annotations
 
+import zipfile
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -11,12 +12,14 @@ import pyarrow as pa
 
 from robofollow.data.sinks import image_key
 from robofollow.data.stats import array_stats, as_image_stats
-from robofollow.data.units import ROBOT_TYPE
+from robofollow.data.units import ROBOT_TYPE, RecordError
+from robofollow.errors import error_text
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
 from robofollow.sim.objects import FIELDS, FLAT, MAX_OBJECTS
 from robofollow.sim.simulation import CONTROL_HZ
 from robofollow.sim.video import CODEC_NAME, PIXEL_FORMAT
+from robofollow.trajectory import MAX_TRAJECTORY_BYTES, npz_problem
 
 FPS = CONTROL_HZ  # frames are recorded at the control rate: no resampling
 CHUNKS_SIZE = 1000  # files per chunk folder
@@ -25,6 +28,8 @@ INDEX_COLUMNS = ("frame_index", "episode_index", "index", "task_index")
 EXTRA_EPISODE_FIELDS = ("label", "scene", "layout", "seed", "spec_digest")
 ENVIRONMENT_STATE = "observation.environment_state"  # LeRobot's name: the objects observation
 OBJECT_NAMES = tuple(f"object_{row}.{field}" for row in range(MAX_OBJECTS) for field in FIELDS)
+ARRAYS = ("state", "environment_state", "action")  # a unit's arrays.npz (units.dataset_arrays)
+MAX_ARRAYS_BYTES = MAX_TRAJECTORY_BYTES  # arrays.npz: a part of its recording's trajectory
 
 
 @dataclass(frozen=True)
@@ -86,8 +91,21 @@ def info(version: str, width: int, height: int, episode_list: list[Episode], tas
 
 
 def load_arrays(unit: Path) -> dict[str, np.ndarray]:
-    with np.load(unit / "arrays.npz") as data:
-        return {key: data[key] for key in data.files}
+    """A unit's arrays.npz: ARRAYS, at most MAX_ARRAYS_BYTES of them; else RecordError naming
+    the file."""
+    path = unit / "arrays.npz"
+    problem = npz_problem(path, MAX_ARRAYS_BYTES)
+    if problem:
+        raise RecordError(f"{path}: {problem}")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            missing = [key for key in ARRAYS if key not in data.files]
+            if missing:
+                raise RecordError(f"{path}: no {', '.join(missing)} among its arrays")
+            return {key: data[key] for key in ARRAYS}
+    except (OSError, ValueError, MemoryError, zipfile.BadZipFile) as error:
+        raise RecordError(f"{path}: cannot read a unit's arrays ({error_text(error)})"
+                          ) from None
 
 
 def frame_table(episode: Episode, arrays: dict[str, np.ndarray], start: int) -> pa.Table:

@@ -20,6 +20,7 @@ import os
 import zipfile
 import zlib
 from dataclasses import MISSING, dataclass, fields
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -87,8 +88,6 @@ MAX_PARAMS_BYTES = 8 * MAX_PARAMETERS + (1 << 20)  # params.npz: MAX_PARAMETERS 
 MAX_OPTIMIZER_BYTES = 2 * MAX_PARAMS_BYTES  # optimizer.npz: Adam's two moments of every
 #   parameter and the step; twice params.npz (about 7 MB for a network of the shipped size)
 NORMALIZED = {"state": ACTION_WIDTH, "action": ACTION_WIDTH, "objects": OBJECT_FIELDS}
-_ARCHITECTURE = TypeAdapter(Architecture)
-_ARCH_FIELDS = fields(Architecture)
 
 
 def load(folder: Path) -> Checkpoint:
@@ -134,20 +133,30 @@ def _keys(path: Path, data: dict, required, optional=(), where: str = "") -> Non
                               f"{'; ' + hint if hint else ''}")
 
 
+_adapter = cache(TypeAdapter)  # a dataclass's validator, made once
+
+
+def validated(path: Path, kind: type, data, where: str):
+    """policy.json's object at `where` as the dataclass `kind`: its fields (those without a
+    default required) and no others, each of its type (strictly: no bool for a number);
+    else a CheckpointError naming the field."""
+    if not isinstance(data, dict):
+        raise CheckpointError(f"{path}: {where} is {shown(data)}, not an object")
+    _keys(path, data, [f.name for f in fields(kind) if f.default is MISSING],
+          [f.name for f in fields(kind) if f.default is not MISSING], f"{where}: ")
+    try:
+        return _adapter(kind).validate_json(json.dumps(data), strict=True)
+    except ValidationError as error:
+        first = error.errors()[0]
+        field = ".".join(map(str, first["loc"]))
+        raise CheckpointError(f"{path}: {where}.{field} is {shown(first['input'])}: "
+                              f"{first['msg'][:1].lower() + first['msg'][1:]}") from None
+
+
 def _architecture(path: Path, data) -> Architecture:
     """The architecture: Architecture's fields of their types, in range, and a network of at
     most MAX_PARAMETERS values."""
-    if not isinstance(data, dict):
-        raise CheckpointError(f"{path}: architecture is {shown(data)}, not an object")
-    _keys(path, data, [f.name for f in _ARCH_FIELDS if f.default is MISSING],
-          [f.name for f in _ARCH_FIELDS if f.default is not MISSING], "architecture: ")
-    try:
-        arch = _ARCHITECTURE.validate_json(json.dumps(data), strict=True)
-    except ValidationError as error:
-        first = error.errors()[0]
-        where = ".".join(map(str, first["loc"]))
-        raise CheckpointError(f"{path}: architecture.{where} is {shown(first['input'])}: "
-                              f"{first['msg'][:1].lower() + first['msg'][1:]}") from None
+    arch = validated(path, Architecture, data, "architecture")
     problem = _architecture_problem(arch)
     if problem:
         raise CheckpointError(f"{path}: architecture.{problem}")

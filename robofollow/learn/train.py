@@ -25,7 +25,9 @@ from pathlib import Path
 import numpy as np
 from tqdm import tqdm
 
+from robofollow.files import number_problem
 from robofollow.learn import checkpoint
+from robofollow.learn.checkpoint import CheckpointError
 from robofollow.learn.demos import Demonstrations, read_demonstrations
 from robofollow.learn.model import Architecture, forward, init, normalised_objects
 from robofollow.learn.options import TrainingError, TrainOptions, reads_objects
@@ -35,20 +37,42 @@ WARMUP = 200  # steps of linear learning-rate warm-up
 FINAL_LR = 0.1  # the cosine decay ends at this fraction of the learning rate
 VALIDATION_SAMPLES = 1024  # held-out frames scored at each checkpoint
 BETAS, EPSILON = (0.9, 0.999), 1e-8
+COUNTS = ("steps", "batch", "factor", "chunk", "execute", "checkpoint_every", "episodes_per_task",
+          "variants_per_task")  # the options the command line takes as whole numbers from 1
 
 
 def resumed_options(out: Path, dataset: Path, given: dict) -> TrainOptions:
     """The options recorded in the checkpoint at `out`; options given again must agree."""
-    recorded = dict(checkpoint.load(out).training["options"])
-    recorded["cameras"] = tuple(recorded["cameras"])
-    if Path(recorded["dataset"]).resolve() != dataset.resolve():
-        raise TrainingError(f"{out} was trained on {recorded['dataset']}, not {dataset}")
+    options = _recorded_options(out / "policy.json", checkpoint.load(out).training)
+    if Path(options.dataset).resolve() != dataset.resolve():
+        raise TrainingError(f"{out} was trained on {options.dataset}, not {dataset}")
+    recorded = options.to_dict()
     differing = [f"--{name.replace('_', '-')} {value} (recorded: {recorded[name]})"
                  for name, value in given.items() if recorded.get(name) != value]
     if differing:
         raise TrainingError(f"--resume continues {out} with its recorded options; these "
                             f"differ: {'; '.join(differing)}")
-    return TrainOptions(**recorded)
+    return options
+
+
+def _recorded_options(path: Path, training: dict) -> TrainOptions:
+    """What a resumed run reads of policy.json's training record: its options, each of its
+    type and in range, and the wall time spent; else a CheckpointError naming the field."""
+    options = checkpoint.validated(path, TrainOptions, training.get("options"),
+                                   "training.options")
+    for name in COUNTS:
+        value = getattr(options, name)
+        if value is not None and value < 1:
+            raise CheckpointError(f"{path}: training.options.{name} is {value}, not a whole "
+                                  "number from 1")
+    try:
+        options.check()
+    except TrainingError as error:
+        raise CheckpointError(f"{path}: training.options: {error}") from None
+    problem = number_problem(training.get("wall_seconds"), 0)
+    if problem:
+        raise CheckpointError(f"{path}: training.wall_seconds {problem}")
+    return options
 
 
 def default_cache() -> Path:

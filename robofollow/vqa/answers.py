@@ -8,10 +8,15 @@ from __future__ import annotations
 
 from typing import Literal
 
+from pydantic import ConfigDict, ValidationInfo, field_validator
+from pydantic_core import PydanticCustomError
+
 from robofollow.compiler.scene.model import Model
 from robofollow.compiler.scene.world import World
 
 KIND_WORDS = {"label": "square label"}  # how a body kind is said, where not by its name
+NEEDS = {"color": "color", "object": "object", "sides": "objects"}  # the field each type of
+#   answer needs
 
 
 class Named(Model):
@@ -34,6 +39,27 @@ class Expected(Model):
     sides: tuple[str, ...] = ()  # parallel to objects
     question_names: tuple[Named, ...] = ()  # what the question itself names (its landmark)
     template: str = ""  # the question's template, for how sides may be stated
+    model_config = ConfigDict(validate_default=True)  # what a type needs may be left out
+
+    @field_validator(*NEEDS.values())
+    @classmethod
+    def _given(cls, value, info: ValidationInfo):
+        """The field this type of answer needs is given."""
+        kind = info.data.get("type")
+        if not value and NEEDS.get(kind) == info.field_name:
+            raise PydanticCustomError("needed", "an answer of type {kind} needs it",
+                                      {"kind": kind})
+        return value
+
+    @field_validator("sides")
+    @classmethod
+    def _parallel(cls, sides: tuple[str, ...], info: ValidationInfo) -> tuple[str, ...]:
+        """As many sides as objects."""
+        objects = info.data.get("objects")
+        if objects is not None and len(sides) != len(objects):
+            raise PydanticCustomError("parallel", "{sides} sides for {objects} objects",
+                                      {"sides": len(sides), "objects": len(objects)})
+        return sides
 
     @property
     def text(self) -> str:
