@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from robofollow.errors import RoboFollowError, error_text
-from robofollow.files import file_problem
+from robofollow.files import file_problem, size_text
 
 ARMS = ("left", "right")
 CONTACT_EXTRAS = ("table", "left_gripper", "right_gripper")
@@ -104,9 +104,11 @@ def npz_problem(path: Path, limit: int) -> str | None:
     try:
         with zipfile.ZipFile(path) as archive:
             unpacked = sum(info.file_size for info in archive.infolist())
-    except (OSError, zipfile.BadZipFile):
+    except zipfile.BadZipFile:
         return "not a .npz file (not a zip archive)"
-    return f"its arrays unpack to more than {limit >> 20} MiB" if unpacked > limit else None
+    except OSError as error:
+        return f"cannot be read ({error.strerror or error})"
+    return f"its arrays unpack to more than {size_text(limit)}" if unpacked > limit else None
 
 
 _ARRAYS = ("movable", "time", "state", "action", "positions", "quaternions", "ee_positions",

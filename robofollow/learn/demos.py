@@ -241,8 +241,9 @@ def _camera(root: Path, info: dict, episodes: list[dict], camera: str, factor: i
         raise DatasetError(f"{root}: no camera {camera!r} in the dataset")
     path = None
     if cache is not None:
-        identity = json.dumps([str(root.resolve()), info["total_frames"],
-                               info["total_episodes"], (root / "meta" / "info.json").stat()
+        # (the counts as given, of any type: they only tell datasets apart)
+        identity = json.dumps([str(root.resolve()), info.get("total_frames"),
+                               info.get("total_episodes"), (root / "meta" / "info.json").stat()
                                .st_mtime_ns, camera, factor])
         path = cache / f"{hashlib.sha256(identity.encode()).hexdigest()[:16]}.npy"
         if path.is_file():

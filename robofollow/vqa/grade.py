@@ -7,6 +7,7 @@ to ANSWERS.jsonl), so a copy of questions.jsonl with a "prediction" added to eac
 
 from __future__ import annotations
 
+import os
 from collections import defaultdict
 from pathlib import Path
 
@@ -58,7 +59,8 @@ def grade(answers: Path, questions: Path | None = None) -> dict:
     """{"correct", "total", "templates": {template: [correct, total]}, "results": [...]}."""
     known: dict[str, tuple[str, dict]] = {}  # id -> (file:line, question)
     given, questions = questions is not None, questions or answers.parent / "questions.jsonl"
-    if (given or questions.is_file()) and questions.resolve() != answers.resolve():
+    same = os.path.realpath(questions) == os.path.realpath(answers)  # (never raises)
+    if (given or questions.is_file()) and not same:
         known = {r["id"]: (f"{questions}:{n}", r) for n, r in _read_jsonl(questions)}
     results, templates = [], defaultdict(lambda: [0, 0])
     for number, record in _read_jsonl(answers):
