@@ -696,3 +696,15 @@ def test_a_trajectory_whose_arrays_claim_too_much_is_one_error(tmp_path):
     with pytest.raises(trajectory.TrajectoryError,
                        match=r"cannot read a trajectory \((MemoryError|ValueError)"):
         trajectory.Trajectory.load(path)
+
+
+@pytest.mark.parametrize("version", ["v2.1", "v3.0"])
+@pytest.mark.parametrize("key", ["data_path", "video_path"])
+def test_a_path_template_with_unknown_fields_is_one_finding(tmp_path, inputs, version, key):
+    """A path template of info.json that names a field the check does not fill in (a
+    KeyError traceback) is one finding naming it."""
+    root = _copy(inputs.dataset if version == "v2.1" else inputs.v30, tmp_path / "dataset")
+    info = json.loads((root / "meta" / "info.json").read_text())
+    (root / "meta" / "info.json").write_text(json.dumps({**info, key: "{nope}/{0}.parquet"}))
+    errors = check(root).errors
+    assert [e.startswith(f"meta/info.json: {key} is ") for e in errors].count(True) == 1, errors

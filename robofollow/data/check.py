@@ -50,7 +50,7 @@ from robofollow.data.check_parts import (
     vector_widths,
 )
 from robofollow.data.lerobot import VIDEO_KEYS
-from robofollow.files import file_problem
+from robofollow.files import file_problem, shown
 from robofollow.sim.cameras import CAMERA_NAMES
 from robofollow.sim.objects import FLAT as OBJECTS_WIDTH
 
@@ -95,8 +95,30 @@ def _read_frames(root: Path, name: str, where: str, report: Report) -> pa.Table 
 
 # -- LeRobot v2.1 ----------------------------------------------------------------------------
 
+def _paths_known(info: dict, templates: dict[str, tuple[str, ...]], report: Report) -> bool:
+    """Whether info.json's path templates take the fields the check fills in (each that does
+    not is a finding: it would fail when formatted)."""
+    for key, fields in templates.items():
+        try:
+            info[key].format(**{field: VIDEO_KEYS[0] if field == "video_key" else 0
+                                for field in fields})
+        except (AttributeError, KeyError, IndexError, TypeError, ValueError):
+            report.error("meta/info.json", f"{key} is {shown(info.get(key))}, not a path "
+                         f"template of {', '.join(fields)}")
+            return False
+    return True
+
+
+V21_PATHS = {"data_path": ("episode_chunk", "episode_index"),
+             "video_path": ("episode_chunk", "video_key", "episode_index")}
+V30_PATHS = {"data_path": ("chunk_index", "file_index"),
+             "video_path": ("video_key", "chunk_index", "file_index")}
+
+
 def _check_v21(root: Path, info: dict, report: Report) -> None:
     features = check_info(info, report, ("video_path", "chunks_size", "total_chunks"))
+    if not _paths_known(info, V21_PATHS, report):
+        return
     vectors = vector_widths(features)
     meta = root / "meta"
     episodes = load_jsonl(meta / "episodes.jsonl", report, EPISODE_KINDS)
@@ -151,6 +173,8 @@ V30_ROW_KINDS = {**EPISODE_KINDS, "dataset_from_index": WHOLE, "dataset_to_index
 
 def _check_v30(root: Path, info: dict, report: Report) -> None:
     features = check_info(info, report, ("video_path", "chunks_size"))
+    if not _paths_known(info, V30_PATHS, report):
+        return
     vectors = vector_widths(features)
     meta = root / "meta"
     tasks = read_tasks(meta / "tasks.parquet", report)
@@ -271,6 +295,7 @@ def _check_hdf5(root: Path, info: dict, report: Report) -> None:
                         report.error(where, f"images/{camera} is {data.dtype} {data.shape}")
                 if json.loads(h5["instructions"][()]) != record["instructions"]:
                     report.error(where, "instructions differ from episodes.jsonl")
-        except (OSError, KeyError) as error:
+        except (OSError, KeyError, ValueError) as error:  # (ValueError: instructions that
+            #   are not JSON, or not text)
             report.error(where, f"cannot read {record['file']}: {error}")
     check_totals(info, lengths, report, where="info.json")
