@@ -210,3 +210,25 @@ def test_a_split_asking_for_moved_tasks_keeps_only_moved_l1_and_l3_tasks(tmp_pat
     assert all(r.level == "L1" and r.reason == f"as-trained: the expert moves as {r.origin} does"
                for r in as_trained)
     assert moved.of("scene1", "L0") == every.of("scene1", "L0")
+
+
+def test_training_tasks_left_without_a_rewording_are_named_with_the_words_missing(tmp_path):
+    """A training task none of whose rewordings is kept (the cap apart) is named in the
+    summary with what dropped them: above all words no training sentence of the scene uses
+    (15 of 17 of an author's new tasks got no L2 or L3 task, without a word)."""
+    from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.benchmark.summary import summary
+
+    (tmp_path / "scene4.rf").write_text((SPECS / "scene4.rf").read_text())
+    compiled = compile_specs(tmp_path)
+    lines = summary(compiled).splitlines()
+    head = next(i for i, line in enumerate(lines)
+                if line.startswith("training tasks with no L2 or L3 rewording kept"))
+    l2 = next(line for line in lines[head + 1:] if line.startswith("  scene4 L2: "))
+    kept = {t.origin for t in compiled.splits.of("scene4", "L2")}
+    assert "s41_l_pick_blue_not_cube" in l2 and "s41_l_pick_blue_not_cube" not in kept
+    assert "words training never uses: rightmost" in l2
+    training = {t.label for t in compiled.spec.tasks}
+    capped = {r.origin for r in compiled.splits.rejected
+              if r.level == "L2" and r.reason.startswith("over the split's max")}
+    assert l2.startswith(f"  scene4 L2: {len(training - kept - capped)} of {len(training)} (")

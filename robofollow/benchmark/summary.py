@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+from collections import Counter
+
 from robofollow.audit.splits import FINDING_KEYS
 from robofollow.benchmark.labels import object_moved
 from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.scene.spec import LEVELS, MOTION_LEVELS
-from robofollow.errors import counted
+from robofollow.errors import counted, named
 
 
 def summary(compiled: Compiled, changes: str = "") -> str:
@@ -26,6 +28,7 @@ def summary(compiled: Compiled, changes: str = "") -> str:
     lines += _blind_best_text(report["blind_best"], report["guessable"])
     lines += _motion_text(compiled)
     lines += _rules_text(report["split_rules"])
+    lines += _unreworded_text(compiled)
     same = report["same_behaviour"]
     lines += ["", f"training tasks with the same behaviour on one layout: {len(same) or 'none'}"]
     lines += [f"  {item['layout']}: {', '.join(item['tasks'])}" for item in same]
@@ -96,6 +99,54 @@ def _rules_text(rules: dict) -> list[str]:
     lines.append(f"split rule warnings: {len(rules['warnings']) or 'none'}")
     lines += [f"  {warning}" for warning in rules["warnings"]]
     return lines
+
+
+CAPPED = "over the split's max"  # a rejection that a kept candidate would have replaced
+WORDS = "words: no training instruction of "  # a rewording with words training never uses
+
+
+def _unreworded_text(compiled: Compiled) -> list[str]:
+    """Per scene and reworded level (a rule with `wordings`), the training tasks no
+    rewording of which was kept, the cap apart, and what dropped their candidates: above all
+    the words a generator used that no training instruction of the scene does."""
+    lines = []
+    for scene_id, scene in compiled.spec.scenes.items():
+        training = [task.label for task in compiled.spec.tasks if task.scene == scene_id]
+        for level in ("L2", "L3"):
+            rule = scene.splits.get(level)
+            if rule is None or not rule.wordings:
+                continue
+            kept = {task.origin for task in compiled.splits.of(scene_id, level)}
+            reasons: dict[str, list[str]] = {label: [] for label in training}
+            for rejection in compiled.splits.rejected:
+                if rejection.scene == scene_id and rejection.level == level:
+                    reasons.setdefault(rejection.origin, []).append(rejection.reason)
+            missing = [label for label in training if label not in kept
+                       and not any(reason.startswith(CAPPED) for reason in reasons[label])]
+            if missing:
+                why = _why_dropped([r for label in missing for r in reasons[label]])
+                lines.append(f"  {scene_id} {level}: {len(missing)} of {len(training)} "
+                             f"({named(missing)}): {why}")
+    if not lines:
+        return []
+    return ["", (f"training tasks with no L2 or L3 rewording kept: {len(lines)} "
+                 "scene x level (rejected.jsonl says why, candidate by candidate; a "
+                 "rewording keeps to the words of the scene's training instructions, "
+                 "docs/spec-language.md#wording-generators):"), *lines]
+
+
+def _why_dropped(reasons: list[str]) -> str:
+    """What dropped the candidates, most often first; for `words`, the words most missing."""
+    if not reasons:
+        return "no candidate rewording"
+    kinds = Counter(reason.split(":")[0] for reason in reasons)
+    words = Counter(word for reason in reasons if reason.startswith(WORDS)
+                    for word in reason.partition(" uses ")[2].split(", "))
+    text = ", ".join(f"{kind} {count}" for kind, count in kinds.most_common())
+    if words:
+        text += " (words training never uses: " + ", ".join(
+            f"{word} {count}" for word, count in words.most_common(6)) + ")"
+    return text
 
 
 def changes(before: set[str], compiled: Compiled, shown: int = 20) -> str:
