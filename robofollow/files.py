@@ -230,6 +230,15 @@ def read_json_file(path: Path, limit: int) -> tuple[Any, str | None]:
     return (None, problem) if problem else json_document(data)
 
 
+def read_json_object(path: Path, limit: int) -> tuple[dict | None, str | None]:
+    """(the JSON object a file holds, None), or (None, why not: read_json_file's reasons, or
+    "a JSON array, not an object")."""
+    value, problem = read_json_file(path, limit)
+    if problem is None and not isinstance(value, dict):
+        problem = f"a JSON {json_type(value)}, not an object"
+    return (None, problem) if problem else (value, None)
+
+
 def json_document(data: bytes) -> tuple[Any, str | None]:
     """(value, None) of a whole JSON document, or (None, what is wrong: "line 3, column 7:
     not JSON (Expecting value)", "line 1, column 2: not UTF-8 text (byte 0xff)")."""

@@ -32,6 +32,7 @@ from robofollow import trajectory
 from robofollow.audit.task_list import read_task_list
 from robofollow.benchmark.splits_lock import read_lock
 from robofollow.cli import main
+from robofollow.data import lerobot_v30
 from robofollow.data.check import check
 from robofollow.data.generate import _manifest
 from robofollow.data.lerobot import EXTRA_EPISODE_FIELDS, VIDEO_KEYS
@@ -218,7 +219,8 @@ def _checked_file(name: str, version: str = "v2.1"):
         if version == "v3.0":
             info = json.loads((dataset / "meta" / "info.json").read_text())
             (dataset / "meta" / "info.json").write_text(json.dumps(
-                {**info, "codebase_version": "v3.0"}))
+                {**info, "codebase_version": "v3.0", "data_path": lerobot_v30.DATA_PATH,
+                 "video_path": lerobot_v30.VIDEO_PATH}))
             pq.write_table(pa.table({"task": ["a"], "task_index": [0]}),
                            dataset / "meta" / "tasks.parquet")
         return dataset / name, ["dataset", "check", str(dataset)]

@@ -97,8 +97,10 @@ def _read_frames(root: Path, name: str, where: str, report: Report) -> pa.Table 
 
 def _paths_known(info: dict, templates: dict[str, tuple[str, ...]], report: Report) -> bool:
     """Whether info.json's path templates take the fields the check fills in (each that does
-    not is a finding: it would fail when formatted)."""
+    not is a finding: it would fail when formatted; one that is not text check_info names)."""
     for key, fields in templates.items():
+        if not isinstance(info.get(key), str):
+            return False
         try:
             info[key].format(**{field: VIDEO_KEYS[0] if field == "video_key" else 0
                                 for field in fields})

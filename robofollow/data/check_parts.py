@@ -22,7 +22,7 @@ from robofollow.files import (
     json_lines,
     number_problem,
     read_file_at_most,
-    read_json_file,
+    read_json_object,
     shown,
 )
 from robofollow.sim import robot
@@ -132,12 +132,9 @@ class Report:
 
 def load_json(path: Path, report: Report) -> dict | None:
     """A JSON object file (at most MAX_JSON_BYTES), or None (reported)."""
-    data, problem = read_json_file(path, MAX_JSON_BYTES)
-    if not problem and not isinstance(data, dict):
-        problem = f"{shown(data)} is not a JSON object"
+    data, problem = read_json_object(path, MAX_JSON_BYTES)
     if problem:
         report.error(path.name, f"unreadable: {problem}")
-        return None
     return data
 
 

@@ -24,7 +24,7 @@ from robofollow.compiler.scene.spec import Scene
 from robofollow.data.jobs import MAX_ATTEMPTS, DemoJob
 from robofollow.data.sinks import ArraySink, FrameSink, VideoSink
 from robofollow.errors import RoboFollowError
-from robofollow.files import read_json_file, shown
+from robofollow.files import read_json_object
 from robofollow.sim import robot
 from robofollow.sim.objects import objects_over
 from robofollow.sim.rollout import ExpertRunner
@@ -73,9 +73,7 @@ class RecordError(RoboFollowError):
 
 def read_record(path: Path) -> dict:
     """A JSON object file of at most MAX_RECORD_BYTES; else RecordError naming it."""
-    data, problem = read_json_file(path, MAX_RECORD_BYTES)
-    if not problem and not isinstance(data, dict):
-        problem = f"{shown(data)} is not a JSON object"
+    data, problem = read_json_object(path, MAX_RECORD_BYTES)
     if problem:
         raise RecordError(f"{path}: {problem}")
     return data

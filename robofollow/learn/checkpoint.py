@@ -31,7 +31,7 @@ from robofollow.files import (
     file_problem,
     key_problem,
     number_problem,
-    read_json_file,
+    read_json_object,
     shown,
     write_json_atomic,
 )
@@ -110,12 +110,10 @@ def load(folder: Path) -> Checkpoint:
 
 def _policy(path: Path) -> dict:
     """policy.json: a JSON object with META_KEYS, in FORMAT."""
-    meta, problem = read_json_file(path, MAX_POLICY_BYTES)
+    meta, problem = read_json_object(path, MAX_POLICY_BYTES)
     if problem:
         raise CheckpointError(f"{path}: {problem} (a baseline checkpoint's policy.json "
                               "expected)")
-    if not isinstance(meta, dict):
-        raise CheckpointError(f"{path}: {shown(meta)} is not a JSON object")
     if "format" in meta and meta["format"] != FORMAT:
         raise CheckpointError(f"{path}: format {meta['format']!r}, expected {FORMAT!r}")
     _keys(path, meta, META_KEYS)

@@ -21,9 +21,8 @@ from robofollow.files import (
     file_problem,
     json_line,
     json_lines,
-    json_type,
     read_file_at_most,
-    read_json_file,
+    read_json_object,
     shown,
     write_bytes_atomic,
     write_json_atomic,
@@ -56,13 +55,11 @@ class RunReadError(EvalRunError):
     file of it that is not as RoboFollow wrote it."""
 
 
-def read_json_object(path: Path, what: str) -> dict:
+def read_run_object(path: Path, what: str) -> dict:
     """A file that holds one JSON object (`what` it is), read up to MAX_JSON_BYTES."""
-    value, problem = read_json_file(path, MAX_JSON_BYTES)
+    value, problem = read_json_object(path, MAX_JSON_BYTES)
     if problem:
         raise RunReadError(f"{path}: {problem} ({what} expected)")
-    if not isinstance(value, dict):
-        raise RunReadError(f"{path}: a JSON {json_type(value)}, not an object ({what})")
     return value
 
 
@@ -293,7 +290,7 @@ def summarised_episodes(run: Path) -> int | None:
     path = run / SUMMARY
     if not present(path):
         return None
-    summary = read_json_object(path, "a run's summary")
+    summary = read_run_object(path, "a run's summary")
     if "episodes" not in summary:
         raise RunReadError(f"{path}: no \"episodes\"")
     count = summary["episodes"]
@@ -323,7 +320,7 @@ def check_prepare(out: Path, options: dict, resume: bool) -> None:
     run_file = out / RUN_FILE
     if not present(run_file) or _unstarted(out):
         return
-    previous = read_json_object(run_file, "a run's options")
+    previous = read_run_object(run_file, "a run's options")
     if not resume:
         raise EvalRunError(f"{out} already holds a run; pass --resume to continue it, or "
                            "choose another folder")
@@ -360,7 +357,7 @@ def prepare(out: Path, options: dict, resume: bool, environment: dict | None) ->
         return
     if environment is None:  # (a resume that runs nothing adds no environment)
         return
-    recorded = read_json_object(run_file, "a run's options")
+    recorded = read_run_object(run_file, "a run's options")
     made = recorded.get("provenance") or []
     if not (isinstance(made, list) and all(isinstance(entry, dict) for entry in made)):
         raise EvalRunError(f"{run_file}: provenance is not a list of objects")

@@ -26,8 +26,8 @@ from robofollow.eval.running.run_folder import (
     SCORES,
     RunReadError,
     present,
-    read_json_object,
     read_results,
+    read_run_object,
 )
 from robofollow.eval.running.runner import EvalOptions, shard_of
 from robofollow.eval.running.scores import (
@@ -154,7 +154,7 @@ def read_run_file(run: Path) -> tuple[EvalOptions, list[dict]]:
     default optional, of their types and in range), and its provenance (empty where it records
     none)."""
     path = run / RUN_FILE
-    data = read_json_object(path, "a run's options")
+    data = read_run_object(path, "a run's options")
     _keys(path, data, _REQUIRED, _OPTIONAL)
     provenance = _provenance(path, data[PROVENANCE]) if PROVENANCE in data else []
     options = _typed(path, {k: v for k, v in data.items() if k != PROVENANCE})
