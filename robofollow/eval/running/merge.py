@@ -29,6 +29,7 @@ from robofollow.eval.running.run_folder import (
     present,
     run_lock,
     safe_path,
+    write_file,
 )
 from robofollow.eval.running.runner import (
     EvalOptions,
@@ -45,7 +46,6 @@ from robofollow.files import (
     json_line,
     json_value,
     read_file_at_most,
-    write_bytes_atomic,
 )
 from robofollow.provenance import differences
 
@@ -213,8 +213,4 @@ def _holds(out: Path, files: dict[str, bytes]) -> bool:
 
 def _write(out: Path, files: dict[str, bytes]) -> None:
     for name, data in files.items():
-        path = safe_path(out, name)
-        try:
-            write_bytes_atomic(path, data)
-        except OSError as error:
-            raise EvalOutputError(f"cannot write {path}: {error.strerror or error}") from None
+        write_file(safe_path(out, name), data)

@@ -21,6 +21,7 @@ from robofollow.files import (
     file_problem,
     json_line,
     json_lines,
+    not_regular,
     read_file_at_most,
     read_json_object,
     shown,
@@ -168,8 +169,7 @@ class ResultsFile:
         except OSError as error:
             raise EvalOutputError(f"cannot write {path}: {error.strerror or error}") from None
         info = os.fstat(self.fd)
-        problem = (_linked_elsewhere(info) if stat.S_ISREG(info.st_mode)
-                   else "not a regular file (a FIFO, socket or device)")
+        problem = not_regular(info.st_mode) or _linked_elsewhere(info)
         if problem:
             os.close(self.fd)
             raise EvalOutputError(f"cannot write {path}: {problem}")
@@ -379,8 +379,13 @@ def check_folder_out(out: Path) -> None:
 
 def write_text_file(path: Path, text: str) -> None:
     """A text file written whole (atomically), or EvalOutputError saying why not."""
+    write_file(path, text.encode("utf-8"))
+
+
+def write_file(path: Path, data: bytes) -> None:
+    """A file written whole (atomically), or EvalOutputError saying why not."""
     try:
-        write_bytes_atomic(path, text.encode("utf-8"))
+        write_bytes_atomic(path, data)
     except OSError as error:
         raise EvalOutputError(f"cannot write {path}: {error.strerror or error}") from None
 
