@@ -1,14 +1,16 @@
-"""The compiled benchmark as an env, `eval`, `serve`, `generate`, `vqa`, `expert`, `score` and
-`render` read it, cached on disk per spec file, so that they start without compiling the specs
-(seconds) and an edited spec compiles only its own scenes.
+"""The compiled benchmark as `compile` writes it and an env, `eval`, `serve`, `generate`, `vqa`,
+`expert`, `score` and `render` read it, cached on disk per spec file, so that they start
+without compiling the specs (seconds) and an edited spec compiles only its own scenes.
 
 They need the spec (its scenes), each scene's training behaviours ('did instead') and the
-episode records. A scene's splits depend on its own spec alone, so each .rf file is compiled
-by itself and kept in one JSON Lines file, `<cache>/compiled/<path>-<spec>-<code>.jsonl`
-(16 hex digits of the sha256 of the file's path, of its bytes and of `code_digest`): a
-header (format, key, episode ids, the sha256 of the rest), the file's scenes and their
-training behaviours, then one episode per line as the build writes `episodes/*.jsonl`; an
-episode is parsed when asked for. The key is a sha256 over the code digest (FORMAT,
+episode records; `compile` also the splits, the audit and the build's files. A scene's splits
+and its part of the audit depend on its own spec alone, so each .rf file is compiled by itself
+and kept in one JSON Lines file, `<cache>/compiled/<path>-<spec>-<code>.jsonl` (16 hex digits
+of the sha256 of the file's path, of its bytes and of `code_digest`): a header (format, key,
+episode ids, the sha256 of the rest), the file's scenes and their training behaviours, one
+episode per line as the build writes `episodes/*.jsonl`, then one line of what only `build`
+reads (the file's audit, its test tasks, its other build files); an episode is parsed when
+asked for. The key is a sha256 over the code digest (FORMAT,
 RoboFollow's version, the compiler's code and grammars: SOURCES), the file's path and its
 bytes, so a change to any of them compiles that file again. A file is written to a temporary
 name and renamed into place; one that does not verify (corrupt, truncated, stale) is compiled
@@ -29,7 +31,7 @@ import secrets
 import sys
 import warnings
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache, cached_property, lru_cache
 from importlib import metadata
 from pathlib import Path
@@ -37,30 +39,44 @@ from pathlib import Path
 from robofollow.benchmark.episode import Episode
 from robofollow.compiler.authoring.spec_files import spec_files
 from robofollow.compiler.scene.behaviour import Behaviour
-from robofollow.compiler.scene.spec import LEVELS, Scene, Spec, scene_behaviours
+from robofollow.compiler.scene.spec import (
+    LEVELS,
+    MAX_SPEC_BYTES,
+    Scene,
+    Spec,
+    scene_behaviours,
+)
+from robofollow.files import read_file_at_most
 from robofollow.resources import cache_root
 
-FORMAT = 2  # bump when the file layout or the records' meaning changes
+FORMAT = 3  # bump when the file layout or the records' meaning changes
 KEEP = 64  # cache files kept (the newest); older ones are removed when one is written
 # the code the compile runs, under robofollow/ (a test checks that these are the modules the
 # cached compile imports, and beside them only the rest of the compiler): a change to it, and
 # only to it, compiles again
-SOURCES = ("benchmark/__init__.py", "benchmark/episode.py", "benchmark/episode_hash.py",
-           "benchmark/guessing.py",
-           "benchmark/pipeline.py", "benchmark/rounds.py", "compiled_cache.py", "errors.py",
+SOURCES = ("benchmark/__init__.py", "benchmark/compiled.py", "benchmark/episode.py",
+           "benchmark/episode_hash.py",
+           "benchmark/guessing.py", "benchmark/labels.py", "benchmark/output.py",
+           "benchmark/pipeline.py", "benchmark/render.py", "benchmark/rounds.py",
+           "benchmark/summary.py", "compiled_cache.py", "errors.py",
            "resources.py", "files.py", "oracle/__init__.py", "oracle/chance.py", "compiler",
            "audit")
 
 
 @dataclass(frozen=True)
-class Part:
-    """What one spec file compiles to: its scenes, their training behaviours by label, and
-    their episodes (ids, and records as JSON lines)."""
+class FilePart:
+    """What one spec file compiles to: its scenes, their training behaviours by label, their
+    episodes (ids, and records as JSON lines), and what only `build` reads, as JSON: the
+    file's audit, its test tasks and its other build files (`render.task_files`). A part
+    compiled in this process also holds the compile and its `render.rendered` files, which
+    `build` takes as they are."""
 
     scenes: dict[str, Scene]
     training: dict[str, Behaviour]
     ids: tuple[str, ...]
     lines: tuple[bytes, ...]
+    build: bytes
+    made: tuple | None = None  # (compiled.Compiled, its rendered files)
 
 
 @dataclass(frozen=True)
@@ -181,26 +197,79 @@ def load(specs: Path) -> Episodes:
     """The compiled benchmark of `specs` (a folder or a file): each spec file's part from the
     cache when it holds it, else compiled (and cached). Raises SpecErrors on bad specs; a cache
     that cannot be read or written is only passed over."""
+    found = _found(specs)
+    if found is None:
+        return _whole(specs)
+    spec, parts = found
+    return Episodes(spec, {label: b for part in parts for label, b in part.training.items()},
+                    tuple(i for part in parts for i in part.ids),
+                    tuple(line for part in parts for line in part.lines))
+
+
+def build(specs: Path):
+    """What `robofollow compile` writes, from the same parts as `load`: the compiled benchmark
+    of `specs` (a `compiled.Compiled`, as one compile of the whole folder gives it) and its
+    `render.rendered` files. Raises SpecErrors on bad specs."""
+    from pydantic import TypeAdapter
+
+    from robofollow.benchmark.compiled import Part, assemble
+    from robofollow.benchmark.output import REJECTED, episode_files, joined
+    from robofollow.compiler.splits.tasks import Rejection, Splits, TestTask
+
+    found = _found(specs)
+    if found is None:
+        return _build_whole(specs)
+    spec, parts = found
+    tasks, rejections = TypeAdapter(list[TestTask]), TypeAdapter(list[Rejection])
+    pieces, files = [], []
+    for part in parts:
+        if part.made is not None:
+            compiled, rendered = part.made
+            pieces.append(Part(compiled.splits, compiled.report))
+            files.append(rendered)
+            continue
+        content = json.loads(part.build)
+        rejected = content["files"][REJECTED].splitlines()
+        splits = Splits(tasks=tuple(tasks.validate_python(content["tasks"])),
+                        rejected=tuple(rejections.validate_json(f"[{','.join(rejected)}]")))
+        pieces.append(Part(splits, content["report"]))
+        files.append(episode_files(part.scenes, part.ids, part.lines) | content["files"])
+    training = {label: b for part in parts for label, b in part.training.items()}
+    return assemble(spec, training, pieces), joined(files)
+
+
+def _build_whole(specs: Path):
+    """`build` of the specs compiled together, uncached."""
+    from robofollow.benchmark.pipeline import compile_specs
+    from robofollow.benchmark.render import rendered
+
+    compiled = compile_specs(specs)
+    return compiled, rendered(compiled)
+
+
+def _found(specs: Path) -> tuple[Spec, tuple[FilePart, ...]] | None:
+    """The spec of `specs` and each spec file's part, from the cache or compiled; None when
+    the files must be compiled together (see the module docstring)."""
     specs = Path(os.path.realpath(specs))
     files = spec_files(specs)
-    try:
-        entries = tuple(Entry(file, file.read_bytes()) for file in files)
-    except OSError:  # an unreadable spec file: the compile says so
-        return _whole(specs)
-    if not entries or any(file.is_symlink() for file in files):
-        return _whole(specs)
-    return _assemble(specs, entries, cache_dir())
+    if not files or any(file.is_symlink() for file in files):
+        return None
+    read = [read_file_at_most(file, MAX_SPEC_BYTES)[0] for file in files]
+    if any(data is None for data in read):  # not a readable regular file: the compile says so
+        return None
+    return _assemble(tuple(map(Entry, files, read)), cache_dir())
 
 
 @lru_cache(maxsize=4)
-def _assemble(specs: Path, entries: tuple[Entry, ...], folder: Path | None) -> Episodes:
+def _assemble(entries: tuple[Entry, ...], folder: Path | None
+              ) -> tuple[Spec, tuple[FilePart, ...]] | None:
     """The parts put together (one read or compile per specs state and cache folder, per
-    process), as one compile of the whole folder gives them."""
+    process): the spec as one compile of the whole folder gives it, and the parts."""
     parts, compiled, cached = [], [], 0
     for entry in entries:
         part, why = _part(entry, folder)
         if part is None:
-            return _whole(specs)
+            return None
         parts.append(part)
         if why:
             compiled.append(f"{', '.join(part.scenes)} ({why})")
@@ -209,7 +278,7 @@ def _assemble(specs: Path, entries: tuple[Entry, ...], folder: Path | None) -> E
     scenes = [scene for part in parts for scene in part.scenes]
     labels = [label for part in parts for label in part.training]
     if len(set(scenes)) != len(scenes) or len(set(labels)) != len(labels):
-        return _whole(specs)  # (the compile reports what is defined twice)
+        return None  # (the compile reports what is defined twice)
     if compiled:
         tail = f", {cached} scene{'' if cached == 1 else 's'} from cache" if cached else ""
         print(f"compiled {', '.join(compiled)}{tail}", file=sys.stderr)
@@ -218,12 +287,10 @@ def _assemble(specs: Path, entries: tuple[Entry, ...], folder: Path | None) -> E
         digest.update(entry.file.name.encode() + b"\0" + entry.data + b"\0")
     spec = Spec(scenes={s: scene for part in parts for s, scene in part.scenes.items()},
                 digest=digest.hexdigest())
-    return Episodes(spec, {label: b for part in parts for label, b in part.training.items()},
-                    tuple(i for part in parts for i in part.ids),
-                    tuple(line for part in parts for line in part.lines))
+    return spec, tuple(parts)
 
 
-def _part(entry: Entry, folder: Path | None) -> tuple[Part | None, str | None]:
+def _part(entry: Entry, folder: Path | None) -> tuple[FilePart | None, str | None]:
     """One spec file's part and why it was compiled (None: read from the cache); no part when
     the file does not compile alone."""
     path = folder / entry.name if folder else None
@@ -234,12 +301,13 @@ def _part(entry: Entry, folder: Path | None) -> tuple[Part | None, str | None]:
             why = _why(folder, entry)
     else:
         why = "caching is off"
-    data = _compile(entry)
-    if data is None:
+    made = _compile(entry)
+    if made is None:
         return None, None
+    data, compiled, files = made
     if path is not None:
         _store(path, data)
-    return _parse(data, entry.key), why
+    return replace(_parse(data, entry.key), made=(compiled, files)), why
 
 
 def _why(folder: Path, entry: Entry) -> str:
@@ -255,49 +323,50 @@ def _why(folder: Path, entry: Entry) -> str:
     return "spec changed" if names else "not cached"
 
 
-def _compile(entry: Entry) -> bytes | None:
-    """The cache file's bytes for one spec file compiled alone; None when it has errors."""
+def _compile(entry: Entry) -> tuple[bytes, object, dict[str, str]] | None:
+    """One spec file compiled alone: its cache file's bytes, the compile and its rendered
+    files; None when it has errors."""
+    from robofollow.benchmark.output import episode_files
     from robofollow.benchmark.pipeline import compile_specs  # (seconds: only on a miss)
+    from robofollow.benchmark.render import episodes, task_files
     from robofollow.errors import SpecErrors
 
     try:
         compiled = compile_specs([entry.file])
     except SpecErrors:
         return None
-    ids, lines = _episodes(compiled)
+    ids, lines = episodes(compiled)
+    files = task_files(compiled)
     head = {"scenes": {s: scene.model_dump(mode="json")
                        for s, scene in compiled.spec.scenes.items()},
             "training": {label: b.model_dump(mode="json")
                          for label, b in compiled.training.items()}}
-    body = json.dumps(head).encode() + b"\n" + b"".join(line + b"\n" for line in lines)
+    build = {"report": compiled.report,
+             "tasks": [task.model_dump(mode="json") for task in compiled.splits.tasks],
+             "files": files}
+    body = (json.dumps(head).encode() + b"\n" + b"".join(line + b"\n" for line in lines)
+            + json.dumps(build).encode() + b"\n")
     header = {"format": FORMAT, "key": entry.key, "sha256": _sha(body), "ids": ids}
-    return json.dumps(header).encode() + b"\n" + body
+    return (json.dumps(header).encode() + b"\n" + body, compiled,
+            episode_files(compiled.spec.scenes, ids, lines) | files)
 
 
-def _episodes(compiled) -> tuple[tuple[str, ...], tuple[bytes, ...]]:
-    """A compile's episodes: their ids, and their records as the build writes them."""
-    from robofollow.benchmark.rounds import episode_lines, ordered_tasks
-
-    lines = [line for task in ordered_tasks(compiled) for line in episode_lines(compiled, task)]
-    return (tuple(episode for episode, _ in lines),
-            tuple(line.rstrip("\n").encode() for _, line in lines))
-
-
-def _parse(data: bytes, key: str) -> Part:
-    """The Part of a cache file's bytes; ValueError when they do not verify."""
+def _parse(data: bytes, key: str) -> FilePart:
+    """The FilePart of a cache file's bytes; ValueError when they do not verify."""
     head, _, body = data.partition(b"\n")
     header = json.loads(head)
     if (header["format"], header["key"]) != (FORMAT, key):
         raise ValueError("a cache file of another format or key")
     if header["sha256"] != _sha(body):
         raise ValueError("a corrupt cache file")
-    first, *lines, end = body.split(b"\n")
+    first, *lines, build, end = body.split(b"\n")
     if end or len(lines) != len(header["ids"]):
         raise ValueError("a cache file whose episodes do not match its ids")
     content = json.loads(first)
-    return Part({s: Scene.model_validate(scene) for s, scene in content["scenes"].items()},
-                {label: Behaviour.model_validate(b) for label, b in content["training"].items()},
-                tuple(header["ids"]), tuple(lines))
+    return FilePart(
+        {s: Scene.model_validate(scene) for s, scene in content["scenes"].items()},
+        {label: Behaviour.model_validate(b) for label, b in content["training"].items()},
+        tuple(header["ids"]), tuple(lines), build)
 
 
 def _whole(specs: Path) -> Episodes:
@@ -309,9 +378,11 @@ def _whole(specs: Path) -> Episodes:
 
 
 def of(compiled) -> Episodes:
-    """A `pipeline.Compiled` as the cache holds it (what evaluating, serving and recording
+    """A `compiled.Compiled` as the cache holds it (what evaluating, serving and recording
     demonstrations read)."""
-    return Episodes(compiled.spec, dict(compiled.training), *_episodes(compiled))
+    from robofollow.benchmark.render import episodes
+
+    return Episodes(compiled.spec, dict(compiled.training), *episodes(compiled))
 
 
 def _store(path: Path, data: bytes) -> None:

@@ -40,7 +40,7 @@ from robofollow.provenance import environment
 from robofollow.resources import releases_dir
 
 if TYPE_CHECKING:  # (the compiler loads only where a release is frozen)
-    from robofollow.benchmark.pipeline import Compiled
+    from robofollow.benchmark.compiled import Compiled
 
 CURRENT = "v1"  # the release commands read by default
 DATA = "benchmark.jsonl.gz"

@@ -11,8 +11,9 @@ from contextlib import contextmanager
 from functools import lru_cache
 
 from robofollow import compiled_cache, release
+from robofollow.benchmark.compiled import Compiled
 from robofollow.benchmark.episode import Episode
-from robofollow.benchmark.pipeline import Compiled, compile_specs
+from robofollow.benchmark.pipeline import compile_specs
 from robofollow.resources import builtin_specs
 
 

@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 
 from robofollow import cli
-from robofollow.audit.splits import findings
+from robofollow.audit.report import findings
 from robofollow.audit.task_list import ListedTask, audit_task_list, task_list
 from robofollow.benchmark.pipeline import compile_specs
 from robofollow.resources import builtin_specs

@@ -439,10 +439,13 @@ def test_a_full_disk_leaves_the_previous_build_and_nothing_half_written(tmp_path
     out = tmp_path / "build"
     assert compile_to(out, specs, capsys)[0] == 0
     before = {p.relative_to(out): p.read_bytes() for p in out.rglob("*") if p.is_file()}
-    def full(compiled, task):  # the disk fills up once the new build's folders are made
+    written = output._write_files
+
+    def full(compiled, folder, summary, files):  # the disk fills up part-way through
+        written(compiled, folder, summary, dict(list(files.items())[:3]))
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(output, "episode_lines", full)
+    monkeypatch.setattr(output, "_write_files", full)
     status, _, err = compile_to(out, specs, capsys)
     assert status == 1
     assert f"cannot write the build to {out}: no space left on the device" in err
@@ -451,10 +454,10 @@ def test_a_full_disk_leaves_the_previous_build_and_nothing_half_written(tmp_path
 
 
 def test_a_full_disk_on_a_new_folder_leaves_nothing(tmp_path, specs, capsys, monkeypatch):
-    def full(record):
+    def full(compiled, folder, summary, files):
         raise OSError(errno.ENOSPC, "No space left on device")
 
-    monkeypatch.setattr(output, "_line", full)
+    monkeypatch.setattr(output, "_write_files", full)
     status, _, err = compile_to(tmp_path / "new" / "build", specs, capsys)
     assert status == 1 and "no space left on the device" in err
     assert not (tmp_path / "new").exists()

@@ -180,6 +180,22 @@ def test_the_cache_holds_what_one_compile_of_the_folder_gives(two_scenes):
         episode for episode in all_episodes(compiled) if episode.round == 2]
 
 
+def test_the_build_holds_what_one_compile_of_the_folder_builds(two_scenes, monkeypatch):
+    """What `compile` writes, put together from the spec files compiled alone (the scenes'
+    splits, their audits combined, the rendered files), is one compile of the folder's."""
+    from robofollow.benchmark import pipeline
+    from robofollow.benchmark.render import rendered
+
+    whole = pipeline.compile_timed(two_scenes)[0]
+    compiled_cache.build(two_scenes)  # (compiled, or read, and cached)
+    compiled_cache._assemble.cache_clear()
+    monkeypatch.setattr(compiled_cache, "_compile", pytest.fail)
+    compiled, files = compiled_cache.build(two_scenes)  # read from the cache
+    assert (compiled.spec, compiled.splits) == (whole.spec, whole.splits)
+    assert compiled.training == whole.training and compiled.audit_json == whole.audit_json
+    assert files == rendered(whole)
+
+
 @pytest.mark.parametrize("command", [
     ["eval", "--policy", "noop", "--levels", "L0", "--rounds", "1", "--tasks",
      "scene1/L0/pickup_yellow_block_2", "--quiet", "--out", "{tmp}/run", "--specs", "{specs}"],
@@ -197,6 +213,33 @@ def test_commands_read_the_compiled_benchmark_from_the_cache(command, scene1, ca
     status, _, err = run(capsys, *(part.format(tmp=tmp_path, specs=scene1) for part in command))
     assert status == 0, err
     assert sorted(cache.iterdir()) == cached
+
+
+def test_compile_reads_unchanged_specs_from_the_cache(two_scenes, tmp_path, cache, capsys,
+                                                      monkeypatch):
+    """A repeat `compile` compiles nothing and writes the same build; an edited spec compiles
+    its own scenes only, and says so."""
+    from robofollow.benchmark import pipeline
+
+    specs = shutil.copytree(two_scenes, tmp_path / "specs")
+    status, _, err = run(capsys, "compile", str(specs), "--out", str(tmp_path / "first"),
+                         "--no-verify")
+    assert status == 0 and "compiled scene1 (not cached), scene3 (not cached)" in err
+    compiled_cache._assemble.cache_clear()  # (the per-process memos: as a new process)
+    pipeline._compile_cached.cache_clear()
+    with monkeypatch.context() as patch:
+        patch.setattr(pipeline, "_compile", pytest.fail)  # (a compile would fail the test)
+        status, _, err = run(capsys, "compile", str(specs), "--out", str(tmp_path / "again"),
+                             "--no-verify")
+    assert status == 0 and "compiled" not in err
+    for path in sorted((tmp_path / "first").rglob("*.*")):
+        assert path.read_bytes() == (tmp_path / "again" / path.relative_to(
+            tmp_path / "first")).read_bytes(), path
+    with open(specs / "scene3.rf", "a", encoding="utf-8") as spec:
+        spec.write("\n# changed\n")
+    status, _, err = run(capsys, "compile", str(specs), "--out", str(tmp_path / "edited"),
+                         "--no-verify")
+    assert status == 0 and "compiled scene3 (spec changed), 1 scene from cache" in err
 
 
 def test_an_edited_spec_compiles_only_its_own_scenes(two_scenes, tmp_path, cache, capfd):
@@ -261,7 +304,7 @@ def test_the_key_covers_every_module_the_compiler_runs():
 def test_the_cache_key_covers_what_the_compile_imports_and_nothing_else():
     """A change to the compile's code compiles again; a change to scoring, the simulator or
     the harness does not (their modules are not in the key)."""
-    program = ("import sys, robofollow.benchmark.pipeline, robofollow.benchmark.rounds, "
+    program = ("import sys, robofollow.benchmark.pipeline, robofollow.benchmark.render, "
                "robofollow.compiled_cache; "
                "print('\\n'.join(sys.modules[m].__file__ for m in sys.modules "
                "if m.startswith('robofollow.') and not m.startswith('robofollow.sim')))")

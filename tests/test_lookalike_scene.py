@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import shutil
 
-from robofollow.audit.splits import FINDING_KEYS, findings
+from robofollow.audit.report import FINDING_KEYS, findings
 from robofollow.benchmark.pipeline import compile_specs
 from robofollow.cli import main
 from robofollow.resources import builtin_specs

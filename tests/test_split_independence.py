@@ -11,7 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from robofollow.benchmark.pipeline import clean, compile_specs
+from robofollow.benchmark.compiled import clean
+from robofollow.benchmark.pipeline import compile_specs
 from robofollow.benchmark.rounds import all_episodes, episode_records, ordered_tasks
 from robofollow.benchmark.splits_lock import LOCK_FILE, lock_entries
 from robofollow.cli import compile as compile_command

@@ -11,7 +11,8 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from robofollow.audit.splits import FINDING_KEYS, findings, task_findings
+from robofollow.audit.report import FINDING_KEYS, findings
+from robofollow.audit.splits import task_findings
 from robofollow.benchmark.pipeline import compile_specs
 from robofollow.benchmark.rounds import all_episodes
 from robofollow.compiler.planning.motions import Repertoire

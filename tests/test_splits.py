@@ -10,7 +10,8 @@ from robofollow.compiler.language.parser import parse
 from robofollow.compiler.planning.motions import COMPOSING_LEVELS, Repertoire
 from robofollow.compiler.planning.routes import passes_over
 from robofollow.compiler.scene.world import World
-from robofollow.compiler.splits.generator import episode_seed, generate
+from robofollow.compiler.splits.generator import generate
+from robofollow.compiler.splits.tasks import episode_seed
 from robofollow.compiler.splits.training import check_training
 from robofollow.compiler.splits.wordings import concepts
 

@@ -12,28 +12,16 @@
 
 from __future__ import annotations
 
-from robofollow.audit.entropy import (
-    behaviour_entropy_bits,
-    entropy_bits,
-    same_behaviours,
-    scene_groups,
-)
+from robofollow.audit.entropy import same_behaviours, scene_groups
+from robofollow.audit.report import FINDING_LISTS
 from robofollow.compiler.language import lf
 from robofollow.compiler.scene.behaviour import Behaviour
 from robofollow.compiler.scene.grounding import Grounder, instability
-from robofollow.compiler.scene.spec import Spec
+from robofollow.compiler.scene.spec import LEVELS, Spec
 from robofollow.compiler.scene.world import jitter_worlds
-from robofollow.compiler.splits.generator import Splits, TestTask
 from robofollow.compiler.splits.split_report import rule_report
 from robofollow.compiler.splits.task_rules import TaskRules, arms_of
-
-# the audit's finding lists, by the rule kinds that fill them
-FINDING_LISTS = {"leakage": ("leakage",), "level_inconsistencies": ("level",),
-                 "repertoire_violations": ("repertoire",), "degenerate_routes": ("route",),
-                 "infeasible": ("infeasible",), "duplicates": ("duplicate",),
-                 "ambiguities": ("ambiguous", "no-referent"),
-                 "misleading_wordings": ("wording",)}
-FINDING_KEYS = tuple(FINDING_LISTS)
+from robofollow.compiler.splits.tasks import Splits, TestTask
 
 
 def task_findings(spec: Spec, training: dict[str, Behaviour], splits: Splits,
@@ -86,30 +74,23 @@ def training_ambiguities(spec: Spec, training: dict[str, Behaviour]) -> list[dic
     return findings
 
 
-def audit(spec: Spec, training: dict[str, Behaviour], splits: Splits,
-          examined: frozenset[TestTask] = frozenset()) -> dict:
-    """The audit as one JSON-ready object (`examined`: see task_findings)."""
+def scene_audit(spec: Spec, training: dict[str, Behaviour], splits: Splits,
+                examined: frozenset[TestTask] = frozenset()) -> dict:
+    """The audit of the scenes of `spec` as one JSON-ready object, without what `report.combine`
+    adds over every scene of a benchmark (`examined`: see task_findings). A scene's part
+    depends on its own spec and splits alone."""
     groups = scene_groups(spec)
     for group in groups:
         group["behaviours"] = same_behaviours(spec, training, group["tasks"])
     found = task_findings(spec, training, splits, examined)
     found["ambiguities"] = training_ambiguities(spec, training) + found["ambiguities"]
-    counts = {scene: {level: len(splits.of(scene, level)) for level in ("L0", "L1", "L2", "L3")}
-              for scene in spec.scenes}
     return {
-        "spec_digest": spec.digest,
-        "scene_entropy_bits": round(entropy_bits([len(g["tasks"]) for g in groups]), 6),
-        "behaviour_entropy_bits": round(behaviour_entropy_bits(
-            [[len(b) for b in g["behaviours"]] for g in groups]), 6),
         "groups": groups,
         "same_behaviour": [{"layout": g["layout"], "tasks": b} for g in groups
                            for b in g["behaviours"] if len(b) > 1],
-        "counts": counts,
+        "counts": {scene: {level: len(splits.of(scene, level)) for level in LEVELS}
+                   for scene in spec.scenes},
         **found,
         "rejected": len(splits.rejected),
         "split_rules": rule_report(spec, splits),
     }
-
-
-def findings(report: dict) -> int:
-    return sum(len(report[k]) for k in FINDING_KEYS)

@@ -37,8 +37,8 @@ from robofollow.compiler.language.parser import parse
 from robofollow.compiler.scene.behaviour import Behaviour, Step, describe
 from robofollow.compiler.scene.model import Model
 from robofollow.compiler.scene.spec import LEVELS, Spec
-from robofollow.compiler.splits.generator import TestTask
 from robofollow.compiler.splits.task_rules import TaskRules
+from robofollow.compiler.splits.tasks import TestTask
 from robofollow.errors import InstructionError, RoboFollowError, SpecError
 from robofollow.files import json_lines, read_file_at_most
 

@@ -56,7 +56,7 @@ class Episode(EpisodeSetup):
 
 class Benchmark(Protocol):
     """What running and scoring an episode read of a compiled benchmark: a
-    `pipeline.Compiled`, or the `compiled_cache.Episodes` read from the cache."""
+    `compiled.Compiled`, or the `compiled_cache.Episodes` read from the cache."""
 
     @property
     def spec(self) -> Spec: ...

@@ -20,7 +20,7 @@ from robofollow.compiler.scene.behaviour import Behaviour
 from robofollow.compiler.scene.observation import OBSERVATION_TOLERANCE
 from robofollow.compiler.scene.spec import MOTION_LEVELS, Scene
 from robofollow.compiler.scene.world import World
-from robofollow.compiler.splits.generator import TestTask
+from robofollow.compiler.splits.tasks import TestTask
 
 
 def _sources(world: World, behaviour: Behaviour) -> list[tuple[float, float, float]]:

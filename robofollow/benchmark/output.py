@@ -18,26 +18,17 @@ import errno
 import os
 import secrets
 import shutil
+from collections.abc import Iterable
 from pathlib import Path
 
-from robofollow.benchmark.labels import labels
-from robofollow.benchmark.pipeline import Compiled
-from robofollow.benchmark.rounds import episode_lines
+from robofollow.benchmark.compiled import Compiled
 from robofollow.benchmark.summary import changes, summary
-from robofollow.compiler.planning.goals import goal_graph, graph_to_dict
-from robofollow.compiler.planning.plans import plan
-from robofollow.compiler.scene.behaviour import Behaviour
-from robofollow.compiler.scene.spec import LEVELS, Scene
-from robofollow.compiler.scene.world import World
+from robofollow.compiler.scene.spec import LEVELS
 from robofollow.errors import RoboFollowError
-from robofollow.files import json_line, json_lines, read_file_at_most
+from robofollow.files import json_lines, read_file_at_most
 
 MAX_TASKS_FILE_BYTES = 64 * 1024 * 1024  # a build's tasks/SCENE_LEVEL.jsonl: the largest of the
 #   built-in benchmark's, scene3_L3.jsonl, takes 340 KB
-
-
-def _line(record: dict) -> str:
-    return json_line(record, sort_keys=True)
 
 
 def _task_ids(out: Path) -> set[str]:
@@ -59,7 +50,8 @@ class OutputError(RoboFollowError):
     code = "output"
 
 
-BUILD_FILES = ("audit.json", "rejected.jsonl", "summary.txt")  # beside episodes/ and tasks/
+REJECTED = "rejected.jsonl"
+BUILD_FILES = ("audit.json", REJECTED, "summary.txt")  # beside episodes/ and tasks/
 BUILD_FOLDERS = ("episodes", "tasks")  # of .jsonl files
 
 
@@ -135,9 +127,11 @@ def _make_parents(folder: Path) -> list[Path]:
     return list(reversed(missing))
 
 
-def write(compiled: Compiled, out: Path) -> str:
-    """Write every output file under `out` (created if needed), replacing the build there
-    whole once the new one is complete; what changed against that build, in words. On an
+def write(compiled: Compiled, out: Path, files: dict[str, str]) -> str:
+    """Write the build under `out` (created if needed): `files` (`render.rendered`),
+    audit.json and summary.txt, replacing the build there whole once the new one is
+    complete; the summary written (`summary.summary`, with what changed against that build).
+    On an
     OSError (a full disk) nothing is left half-written: the previous build stays, and an
     OutputError says what failed."""
     check_out(out)
@@ -150,7 +144,8 @@ def write(compiled: Compiled, out: Path) -> str:
     try:
         created = _make_parents(target.parent)
         partial.mkdir()
-        _write_files(compiled, partial, changed)
+        text = summary(compiled, changed)
+        _write_files(compiled, partial, text, files)
         (_replace_inside if inside else _replace)(partial, target)
     except BaseException as error:  # a full disk, or Ctrl-C: nothing half-written stays
         shutil.rmtree(partial, ignore_errors=True)
@@ -166,7 +161,7 @@ def write(compiled: Compiled, out: Path) -> str:
             reason = "no space left on the device"
         raise OutputError(f"cannot write the build to {out}: {reason}; nothing was written "
                           "there") from None
-    return changed
+    return text
 
 
 def _replace(partial: Path, target: Path) -> None:
@@ -209,45 +204,29 @@ def _replace_inside(partial: Path, target: Path) -> None:
     shutil.rmtree(old, ignore_errors=True)
 
 
-def _write_files(compiled: Compiled, out: Path, changed: str) -> None:
+def joined(parts: list[dict[str, str]]) -> dict[str, str]:
+    """A benchmark's `render.rendered` files from those of its spec files compiled alone, in
+    order: each scene's own files, and the rejections one part after the other."""
+    files = {name: text for part in parts for name, text in part.items() if name != REJECTED}
+    return files | {REJECTED: "".join(part[REJECTED] for part in parts)}
+
+
+def episode_files(scenes: Iterable[str], ids: tuple[str, ...],
+                  lines: tuple[bytes, ...]) -> dict[str, str]:
+    """The episodes/ files of the scenes from their `episodes`."""
+    files: dict[str, list[str]] = {f"episodes/{scene}_{level}.jsonl": []
+                                   for scene in scenes for level in LEVELS}
+    for episode, line in zip(ids, lines, strict=True):
+        scene, level, _ = episode.split("/", 2)
+        files[f"episodes/{scene}_{level}.jsonl"].append(line.decode() + "\n")
+    return {name: "".join(texts) for name, texts in files.items()}
+
+
+def _write_files(compiled: Compiled, out: Path, summary_text: str,
+                 files: dict[str, str]) -> None:
     (out / "episodes").mkdir()
     (out / "tasks").mkdir()
-    for scene in compiled.spec.scenes:
-        goals_and_plans = _GoalsAndPlans(compiled.spec.scenes[scene])
-        for level in LEVELS:
-            tasks = compiled.splits.of(scene, level)
-            with open(out / "episodes" / f"{scene}_{level}.jsonl", "w", encoding="utf-8") as f:
-                for task in tasks:
-                    f.writelines(line for _, line in episode_lines(compiled, task))
-            with open(out / "tasks" / f"{scene}_{level}.jsonl", "w", encoding="utf-8") as f:
-                for task in tasks:
-                    goal, points = goals_and_plans.of(task.behaviour, task.layout)
-                    f.write(_line({"task": task.id, "origin": task.origin,
-                                   "wording": task.wording, "layout": task.layout,
-                                   "instruction": task.instruction,
-                                   **labels(goals_and_plans.scene, task, compiled.training),
-                                   "goal": goal, "plan": points}))
-    with open(out / "rejected.jsonl", "w", encoding="utf-8") as f:
-        f.writelines(_line(r.model_dump(mode="json")) for r in compiled.splits.rejected)
+    for name, text in files.items():
+        (out / name).write_text(text, encoding="utf-8")
     (out / "audit.json").write_text(compiled.audit_json, encoding="utf-8")
-    (out / "summary.txt").write_text(summary(compiled, changed), encoding="utf-8")
-
-
-class _GoalsAndPlans:
-    """A scene's goal DAGs and expert plans as the task files hold them, each made once (a
-    reworded task asks for its origin's behaviour on its origin's layout)."""
-
-    def __init__(self, scene: Scene):
-        self.scene = scene
-        self.worlds: dict[str, World] = {}
-        self.made: dict[tuple[str, str], tuple[dict, list]] = {}
-
-    def of(self, behaviour: Behaviour, layout: str) -> tuple[dict, list]:
-        key = behaviour.model_dump_json(), layout
-        if key not in self.made:
-            if layout not in self.worlds:
-                self.worlds[layout] = World(self.scene, layout)
-            self.made[key] = (graph_to_dict(goal_graph(behaviour)),
-                              plan(behaviour, self.worlds[layout]).model_dump(
-                                  mode="json")["points"])
-        return self.made[key]
+    (out / "summary.txt").write_text(summary_text, encoding="utf-8")

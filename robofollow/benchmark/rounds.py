@@ -6,11 +6,11 @@ from __future__ import annotations
 import difflib
 from collections.abc import Iterator
 
+from robofollow.benchmark.compiled import Compiled
 from robofollow.benchmark.episode import Episode
 from robofollow.benchmark.episode_hash import episode_hash, world_digest
-from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.scene.spec import LEVELS, SplitRule
-from robofollow.compiler.splits.generator import TestTask, episode_seed
+from robofollow.compiler.splits.tasks import TestTask, episode_seed
 from robofollow.errors import RoboFollowError
 from robofollow.files import json_line_of, json_value
 

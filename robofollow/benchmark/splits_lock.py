@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from robofollow.benchmark.pipeline import Compiled
+from robofollow.benchmark.compiled import Compiled
 from robofollow.compiler.scene.spec import LEVELS
 from robofollow.errors import RoboFollowError
 from robofollow.files import read_json_file, write_json_atomic

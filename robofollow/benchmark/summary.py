@@ -4,9 +4,9 @@ from __future__ import annotations
 
 from collections import Counter
 
-from robofollow.audit.splits import FINDING_KEYS
+from robofollow.audit.report import FINDING_KEYS
+from robofollow.benchmark.compiled import Compiled
 from robofollow.benchmark.labels import object_moved
-from robofollow.benchmark.pipeline import Compiled
 from robofollow.compiler.scene.spec import LEVELS, MOTION_LEVELS
 from robofollow.errors import counted, named
 

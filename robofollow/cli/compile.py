@@ -7,7 +7,7 @@ import os
 import sys
 from pathlib import Path
 
-from robofollow.cli.common import specs_argument, specs_of
+from robofollow.cli.common import positive, specs_argument, specs_of
 from robofollow.errors import RoboFollowError, UsageError, counted
 
 
@@ -21,13 +21,15 @@ def add_compile(commands) -> None:
     specs_argument(p)
     p.add_argument("--out", required=True, metavar="DIR", help="output folder")
     verify = p.add_mutually_exclusive_group()
-    verify.add_argument("--verify", type=int, nargs="?", const=1, default=None, metavar="ROUNDS",
-                        help="run the scripted expert on the first ROUNDS rounds (default 1) of "
-                             "every test task of every scene in simulation and list the "
-                             "episodes it does not score in full, with the stages lost (exit "
-                             "status 1 if any). Without it, the scenes whose split differs from "
-                             "the folder's splits.lock (new or edited scenes) are verified, one "
-                             "round per task")
+    verify.add_argument("--verify", type=positive, nargs="?", const=1, default=None, metavar="ROUNDS",
+                        help="run the scripted expert in simulation on the first ROUNDS rounds "
+                             "(default 1) of every test task of the scenes whose split differs "
+                             "from the folder's splits.lock (new or edited scenes, or the ones "
+                             "a change to the compiler altered), and list the episodes it does "
+                             "not score in full, with the stages lost (exit status 1 if any). "
+                             "Without it, the same with one round")
+    verify.add_argument("--verify-all", type=positive, nargs="?", const=1, default=None,
+                        metavar="ROUNDS", help="the same on every scene")
     verify.add_argument("--no-verify", action="store_true",
                         help="skip the simulation check, also for scenes not in splits.lock")
     p.add_argument("--strict", action="store_true",
@@ -48,15 +50,15 @@ def add_compile(commands) -> None:
 
 
 def cmd_compile(args) -> int:
+    from robofollow.benchmark.compiled import clean
     from robofollow.benchmark.output import check_out, write
-    from robofollow.benchmark.pipeline import clean, compile_specs
     from robofollow.benchmark.splits_lock import (
         check_lock,
         lock_path,
         read_lock,
         write_lock,
     )
-    from robofollow.benchmark.summary import summary
+    from robofollow.compiled_cache import build
 
     check_out(Path(args.out))  # before the work: an --out that cannot take the build is refused
     if args.release is not None:
@@ -77,9 +79,8 @@ def cmd_compile(args) -> int:
         raise RoboFollowError("--update-lock needs a specs folder (the lock sits beside the "
                               "specs)")
     locked = read_lock(lock)
-    compiled = compile_specs(specs)
-    changed = write(compiled, Path(args.out))
-    print(summary(compiled, changed), end="")
+    compiled, files = build(specs)
+    print(write(compiled, Path(args.out), files), end="")
     warnings = _guess_warnings(compiled)
     print(f"written to {args.out}")
     check = check_lock(compiled, locked)
@@ -89,12 +90,16 @@ def cmd_compile(args) -> int:
         print("\n".join(f"  {line}" for line in check.lines))
     elif locked:
         print(f"\nevery split is the one {lock} pins")
-    if args.verify is not None:
-        verified = _verify(compiled, specs, args.verify, args.workers, tuple(compiled.spec.scenes))
+    if args.verify_all is not None:
+        verified = _verify(compiled, specs, args.verify_all, args.workers,
+                           tuple(compiled.spec.scenes))
     elif check.unlocked and not args.no_verify:
-        verified = _verify(compiled, specs, 1, args.workers, check.unlocked)
+        verified = _verify(compiled, specs, args.verify or 1, args.workers, check.unlocked)
     else:
         verified = True
+        if args.verify is not None:
+            print(f"\nnothing to verify: every split is the one {lock} pins (verified when "
+                  "it was pinned); --verify-all simulates every scene")
     ok = clean(compiled) and verified and not (args.strict and warnings)
     if args.strict and warnings:
         print(f"--strict: {counted(len(warnings), 'warning')} fail the build")
@@ -125,7 +130,7 @@ def _freeze(compiled, name: str, ok: bool) -> None:
 def _guess_warnings(compiled) -> list:
     """The located warnings of the cells a language-blind guess passes too easily, printed
     to standard error."""
-    from robofollow.benchmark.guessing import guess_warnings
+    from robofollow.benchmark.guess_warnings import guess_warnings
 
     warnings = guess_warnings(compiled.spec, compiled.report["guessable"])
     for warning in warnings:
@@ -141,15 +146,30 @@ def _verify(compiled, specs: Path, rounds: int, workers: int | None,
     from robofollow.eval.running.verify import run_expert_episodes
 
     episodes = [e for e in all_episodes(compiled) if e.round <= rounds and e.scene in scenes]
+    workers = workers or os.cpu_count() or 1
+    every = "" if scenes == tuple(compiled.spec.scenes) else "; --verify-all verifies every scene"
     print(f"\nverifying {', '.join(scenes)}: the expert on {counted(len(episodes), 'episode')} "
-          f"({counted(rounds, 'round')} of every test task) in simulation (--no-verify skips it)")
-    results = run_expert_episodes(specs, episodes, workers or os.cpu_count() or 1)
+          f"({counted(rounds, 'round')} of every test task) in simulation, "
+          f"{_about(len(episodes), workers)} on {counted(workers, 'worker')} (--no-verify skips "
+          f"it{every})")
+    results = run_expert_episodes(specs, episodes, workers)
     failures = [r for r in results if not r["full"]]
     print(f"the expert scored in full on {len(results) - len(failures)} of {len(results)}; "
           f"failures: {len(failures) or 'none'}")
     for failure in failures:
         print(f"  {failure['episode']}: {'; '.join(failure['reasons'])}")
     return not failures
+
+
+EXPERT_EPISODE_SECONDS = 0.95  # a worker's wall seconds per expert episode without images
+#   (bench/eval_bench.py, 2 workers on a quiet 2-core CPU: 125.9 episodes/min)
+
+
+def _about(episodes: int, workers: int) -> str:
+    """About how long `episodes` expert episodes take on `workers` workers, in words."""
+    seconds = episodes * EXPERT_EPISODE_SECONDS / max(1, min(workers, episodes))
+    return f"about {max(1, round(seconds))} s" if seconds < 90 else \
+        f"about {round(seconds / 60)} min"
 
 
 def add_audit(commands) -> None:
@@ -176,11 +196,12 @@ def add_audit(commands) -> None:
 
 def cmd_audit(args) -> int:
     from robofollow.audit.task_list import audit_task_list, read_task_list, task_list
-    from robofollow.benchmark.pipeline import clean, compile_specs
+    from robofollow.benchmark.compiled import clean
     from robofollow.benchmark.summary import summary
+    from robofollow.compiled_cache import build
     from robofollow.files import write_jsonl
 
-    compiled = compile_specs(specs_of(args))
+    compiled = build(specs_of(args))[0]
     if args.export_tasks:
         try:
             write_jsonl(Path(args.export_tasks), task_list(compiled.splits))

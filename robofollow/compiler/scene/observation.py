@@ -11,8 +11,6 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 
-import networkx as nx
-
 from robofollow.compiler.scene.spec import Body, Scene
 from robofollow.compiler.scene.world import World
 
@@ -48,6 +46,8 @@ def _seen(scene: Scene, layout: str) -> list[tuple]:
 
 def same_observation(scene: Scene, a: str, b: str) -> bool:
     """Whether layouts `a` and `b` of a scene look the same (see the module docstring)."""
+    import networkx as nx  # (a tenth of a second to import: only when layouts are compared)
+
     first, second = _seen(scene, a), _seen(scene, b)
     if len(first) != len(second):
         return False

@@ -18,56 +18,18 @@ from __future__ import annotations
 
 import hashlib
 from dataclasses import dataclass, field
-from typing import Literal
 
 from robofollow.compiler.language import lf
 from robofollow.compiler.language.realize import STYLES, Realizer
 from robofollow.compiler.scene.behaviour import Behaviour
-from robofollow.compiler.scene.model import Model
 from robofollow.compiler.scene.observation import look_alike
 from robofollow.compiler.scene.spec import Level, Scene, Spec
 from robofollow.compiler.splits.task_rules import TaskRules, arms_of
+from robofollow.compiler.splits.tasks import Rejection, Splits, TestTask
 from robofollow.compiler.splits.wordings import GENERATORS, Describer, concepts
 
 MOVED_LEVELS = ("L1", "L3")  # levels whose tasks say whether the referent's motion moved
 _STYLES = sorted(STYLES)
-
-
-class TestTask(Model):
-    id: str
-    scene: str
-    level: Level
-    layout: str
-    instruction: str
-    form: lf.Instruction
-    behaviour: Behaviour
-    origin: str  # the training task it derives from
-    wording: str  # "training", "listed", or the generator that reworded it
-    # L1 / L3: whether the expert's motion differs from the origin training task's
-    motion: Literal["moved", "as-trained"] | None = None
-
-
-class Rejection(Model):
-    scene: str
-    level: Level
-    layout: str
-    instruction: str
-    origin: str
-    reason: str
-
-
-class Splits(Model):
-    tasks: tuple[TestTask, ...]
-    rejected: tuple[Rejection, ...]
-
-    def of(self, scene: str, level: Level) -> list[TestTask]:
-        return [t for t in self.tasks if t.scene == scene and t.level == level]
-
-
-def episode_seed(task_id: str, round_index: int, base: int) -> int:
-    """The seed of a task's round: fixed by the task id, the round and the split's seed base."""
-    offset = int(hashlib.sha256(task_id.encode()).hexdigest()[:8], 16) % 1000
-    return base + 100 * round_index + offset
 
 
 def _digest_of(task_id: str) -> str:

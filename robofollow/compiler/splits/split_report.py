@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections import Counter
 
 from robofollow.compiler.scene.spec import LEVELS, Spec
-from robofollow.compiler.splits.generator import Splits
+from robofollow.compiler.splits.tasks import Splits
 
 CAPPED = "over the split's max"
 

@@ -1,5 +1,5 @@
 """The scripted expert on compiled episodes in simulation, each scored by the oracle: what
-`robofollow compile --verify` and bench/expert_success.py run. A task whose expert episode
+`robofollow compile --verify` / `--verify-all` and bench/expert_success.py run. A task whose expert episode
 is not scored in full (Intent 1, Execution 1, complete) is listed with the stages it lost; an
 episode whose worker process died (a crash in the simulator) is listed with how it ended."""
 
