@@ -3,9 +3,10 @@
     python bench/eval_bench.py [--runs 3] [--episodes 16] [--expert-episodes 64]
                                [--policies expert,seeing] [--json out.json]
 
-Two policies over sampled episodes (spread over the tasks of all scenes, L0, round 1; the
-image-free expert gets a larger sample, so that pool start-up does not dominate), medians over
-runs in fresh processes:
+Two policies over sampled episodes of the current release (spread over the tasks of all
+scenes, L0, round 1; the image-free expert gets a larger sample, so that pool start-up does not
+dominate), with the options `robofollow eval` gives the runner, medians over runs in fresh
+processes:
   - `expert` (privileged, no images): episodes per minute;
   - `seeing` (the expert, but it asks for all three 320x240 camera images and one action per
     call, so every control step is an observation a vision policy would get): observations per
@@ -31,12 +32,11 @@ from pathlib import Path
 import numpy as np
 
 import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
-from robofollow.benchmark.pipeline import compile_specs
-from robofollow.benchmark.rounds import all_episodes
-from robofollow.compiled_cache import load
+from robofollow import release
+from robofollow.cli.common import positive
 from robofollow.eval.policies.reference import ExpertPolicy
+from robofollow.eval.running.deadline import DEFAULT_POLICY_TIMEOUT
 from robofollow.eval.running.runner import EvalOptions, evaluate, read_results
-from robofollow.resources import builtin_specs
 from robofollow.sim.env import RoboFollowEnv
 
 HERE = Path(__file__).resolve().parent
@@ -53,18 +53,21 @@ def seeing() -> SeeingExpert:
 
 
 def _sample(count: int) -> list[str]:
-    episodes = [e for e in all_episodes(compile_specs(builtin_specs()))
-                if e.level == "L0" and e.round == 1]
-    return [e.id for e in episodes[::max(1, len(episodes) // count)][:count]]
+    """`count` episode ids of the current release, spread over its L0 round-1 episodes."""
+    episodes = [episode_id for episode_id in release.benchmark().select(level="L0")
+                if episode_id.partition("#r")[2] == "1"]
+    return episodes[::max(1, len(episodes) // count)][:count]
 
 
 def _child(policy: str, episode_ids: list[str], workers: int, queue) -> None:
-    compiled = load(builtin_specs())  # the cached benchmark, as `robofollow eval` reads it
+    compiled = release.benchmark()  # the current release, as `robofollow eval` reads it
     tasks = tuple(episode_id.partition("#")[0] for episode_id in episode_ids)
     with tempfile.TemporaryDirectory() as folder:
         out = Path(folder) / "run"
+        # the options `robofollow eval --tasks ... --levels L0 --rounds 1` gives the runner
         options = EvalOptions(policy, tuple(compiled.spec.scenes), ("L0",), 1, "normal", "none",
-                              compiled.spec.digest, tasks)
+                              compiled.spec.digest, tasks, policy_timeout=DEFAULT_POLICY_TIMEOUT,
+                              release=compiled.release, release_digest=compiled.release_digest)
         began = time.perf_counter()
         evaluate(compiled, out, options, workers, progress=False)
         seconds = time.perf_counter() - began
@@ -101,19 +104,22 @@ def bare_env_seconds(episode_id: str, steps: int) -> float:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--runs", type=int, default=3)
-    parser.add_argument("--episodes", type=int, default=16, help="episodes for `seeing`")
-    parser.add_argument("--expert-episodes", type=int, default=64,
+    parser.add_argument("--runs", type=positive, default=3)
+    parser.add_argument("--episodes", type=positive, default=16, help="episodes for `seeing`")
+    parser.add_argument("--expert-episodes", type=positive, default=64,
                         help="episodes for the image-free `expert`")
     parser.add_argument("--policies", default="expert,seeing",
                         help="which of expert, seeing to time (default: both)")
     parser.add_argument("--json", help="write the figures to this file")
     args = parser.parse_args(argv)
+    chosen = [label for label in args.policies.split(",") if label]
+    unknown = [label for label in chosen if label not in ("expert", "seeing")]
+    if unknown or not chosen:
+        parser.error(f"--policies {args.policies!r}: expected expert and/or seeing")
     os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(HERE),
                                                              os.environ.get("PYTHONPATH")]))
     sys.path.insert(0, str(HERE))
     samples = {"expert": _sample(args.expert_episodes), "seeing": _sample(args.episodes)}
-    chosen = [label for label in args.policies.split(",") if label]
     figures: dict = {"episodes": {label: samples[label] for label in chosen}}
     print(f"episodes (L0, round 1, spread over the scenes): "
           f"{', '.join(f'{len(samples[label])} for {label}' for label in chosen)}; "

@@ -22,6 +22,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from robofollow.cli.common import positive
+
 ROOT = Path(__file__).resolve().parent.parent
 AUTHORED = ROOT / "tests" / "data" / "authored_scene" / "scene6.rf"
 TARGET = 2.0  # s, median on a quiet machine
@@ -49,7 +51,7 @@ def wall(command: list[str], env: dict[str, str]) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--runs", type=positive, default=5)
     parser.add_argument("--episode", default="scene6/L0/red_cube_on_purple_label#r1")
     parser.add_argument("--specs", type=Path,
                         help="spec folder (default: the shipped specs and the authored scene)")

@@ -1,11 +1,13 @@
 """The scripted expert on every compiled episode (every task, every round), rendering off.
 
     python bench/expert_success.py [--specs specs] [--workers 2] [--levels L0,L1,L2,L3]
-                                   [--scenes scene1,...] [--rounds N] [--json out.json]
+                                   [--scenes scene1,...] [--tasks ID,...] [--rounds N]
+                                   [--json out.json]
 
-Each recording is scored by the oracle. Prints the share of episodes with full marks (Intent
-1, Execution 1 and complete) per scene x level, and every other episode with the stages it lost.
-Targets: >= 99% overall and no cell below 97%.
+The episodes are those of the specs' working compile (from the compile cache), run as
+`robofollow compile --verify-all` runs them. Each recording is scored by the oracle. Prints the
+share of episodes with full marks (Intent 1, Execution 1 and complete) per scene x level, and
+every other episode with the stages it lost. Targets: >= 99% overall and no cell below 97%.
 """
 
 from __future__ import annotations
@@ -17,9 +19,10 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
-from robofollow.benchmark.pipeline import compile_specs
-from robofollow.benchmark.rounds import all_episodes
+from robofollow.cli.common import positive
+from robofollow.compiled_cache import load
 from robofollow.compiler.scene.spec import LEVELS
+from robofollow.errors import did_you_mean
 from robofollow.eval.running.verify import run_expert_episodes
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -28,17 +31,35 @@ ROOT = Path(__file__).resolve().parent.parent
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--specs", default=str(ROOT / "specs"))
-    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--workers", type=positive, default=2)
     parser.add_argument("--levels", default=",".join(LEVELS))
-    parser.add_argument("--scenes", default="")
-    parser.add_argument("--rounds", type=int, default=None, help="only the first N rounds")
+    parser.add_argument("--scenes", default="", help="comma-separated scenes (default: all)")
+    parser.add_argument("--tasks", default="", help="comma-separated task ids, e.g. "
+                        "scene2/L0/pickup_left_cube (default: every task)")
+    parser.add_argument("--rounds", type=positive, default=None, help="only the first N rounds")
     parser.add_argument("--json", help="write every result to this file")
     args = parser.parse_args(argv)
-    compiled = compile_specs(Path(args.specs))
-    levels, scenes = args.levels.split(","), [s for s in args.scenes.split(",") if s]
-    todo = [e for e in all_episodes(compiled) if e.level in levels
-            and (not scenes or e.scene in scenes)
-            and (args.rounds is None or e.round <= args.rounds)]
+    compiled = load(Path(args.specs))  # what each worker reads (and fills the cache for them)
+    levels, scenes, tasks = ([name for name in given.split(",") if name]
+                             for given in (args.levels, args.scenes, args.tasks))
+    for noun, names, known in (("level", levels, LEVELS),
+                               ("scene", scenes, compiled.spec.scenes),
+                               ("task", tasks, compiled.task_ids)):
+        for name in (name for name in names if name not in known):
+            hint = did_you_mean(name, known)
+            parser.error(f"--{noun}s: no {noun} {name!r} in {args.specs}"
+                         + (f"; {hint}" if hint else ""))
+
+    def chosen(episode_id: str) -> bool:
+        task, _, round_index = episode_id.partition("#r")
+        scene, level, _ = task.split("/", 2)
+        return (level in levels and (not scenes or scene in scenes)
+                and (not tasks or task in tasks)
+                and (args.rounds is None or int(round_index) <= args.rounds))
+
+    todo = compiled.episodes(chosen)
+    if not todo:
+        parser.error("no episode is of the --levels, --scenes and --tasks given")
     began = time.perf_counter()
     results = run_expert_episodes(Path(args.specs), todo, args.workers)
     wall = time.perf_counter() - began

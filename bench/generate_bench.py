@@ -2,7 +2,8 @@
 2 workers, against bare MuJoCo physics + rendering of the same frames.
 
     python bench/generate_bench.py [--runs 3] [--tasks 8] [--episodes-per-task 2]
-                                   [--format lerobot-v2.1] [--json out.json]
+                                   [--format lerobot-v2.1] [--projection-tasks N]
+                                   [--json out.json]
 
 Reports, as medians over runs (each run a fresh process and a fresh output folder):
   - demonstrations (episodes) per minute and frames per second, 1 and 2 workers;
@@ -11,13 +12,19 @@ Reports, as medians over runs (each run a fresh process and a fresh output folde
     encoding, statistics and writing are all generation overhead);
   - peak resident memory per worker (for one worker, the process that records and writes);
   - the projected wall time of the full set (every training task x 50) with 2 workers, from
-    the mean demonstration length over all training tasks (one expert run each, no rendering)
-    and the measured 2-worker frame rate (target <= 2 h).
+    the mean demonstration length over all training tasks (or --projection-tasks of them; one
+    expert run each, no rendering) and the measured 2-worker frame rate (target <= 2 h).
+
+The tasks are the current release's, as `robofollow generate` reads them.
 """
 
 from __future__ import annotations
 
+import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
+
+# isort: split
 import argparse
+import dataclasses
 import json
 import multiprocessing
 import resource
@@ -30,12 +37,11 @@ import mujoco
 import numpy as np
 import pyarrow.parquet as pq
 
-import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
-from robofollow.benchmark.pipeline import compile_specs
+from robofollow import release
+from robofollow.cli.common import positive
 from robofollow.data.generate import generate
-from robofollow.data.jobs import demo_jobs
+from robofollow.data.jobs import FORMATS, demo_jobs, select_tasks
 from robofollow.data.units import Options
-from robofollow.resources import builtin_specs
 from robofollow.sim.cameras import CAMERA_NAMES
 from robofollow.sim.rollout import ExpertRunner
 from robofollow.sim.simulation import Simulation
@@ -44,12 +50,13 @@ FULL_PER_TASK = 50
 
 
 def _labels(count: int) -> list[str]:
-    labels = [t.label for t in compile_specs(builtin_specs()).spec.tasks]
+    """`count` training task labels, spread over the current release's."""
+    labels = select_tasks(release.benchmark(), None)
     return labels[::max(1, len(labels) // count)][:count]
 
 
 def _generate_child(out: str, options: Options, workers: int, queue) -> None:
-    compiled = compile_specs(builtin_specs())
+    compiled = release.benchmark()  # the current release, as `robofollow generate` reads it
     began = time.perf_counter()
     result = generate(compiled, Path(out), options, workers, progress=False)
     seconds = time.perf_counter() - began
@@ -76,7 +83,7 @@ def timed_generation(options: Options, workers: int, keep: Path | None = None) -
 
 def bare_seconds(dataset: Path, width: int, height: int) -> float:
     """Physics steps and three renders per frame of the dataset's demonstrations."""
-    compiled = compile_specs(builtin_specs())
+    compiled = release.benchmark()
     manifest = json.loads((dataset / "manifest.json").read_text())
     total = 0.0
     for demo in manifest["demos"]:
@@ -101,10 +108,9 @@ def bare_seconds(dataset: Path, width: int, height: int) -> float:
     return total
 
 
-def mean_length() -> float:
-    """Mean dataset frames per demonstration over every training task (episode 0 each)."""
-    compiled = compile_specs(builtin_specs())
-    labels = [t.label for t in compiled.spec.tasks]
+def mean_length(labels: list[str]) -> float:
+    """Mean dataset frames per demonstration over these training tasks (episode 0 each)."""
+    compiled = release.benchmark()
     lengths = []
     with ExpertRunner() as runner:
         for job in demo_jobs(compiled, 1, labels):
@@ -115,13 +121,16 @@ def mean_length() -> float:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--runs", type=int, default=3)
-    parser.add_argument("--tasks", type=int, default=8, help="training tasks sampled")
-    parser.add_argument("--episodes-per-task", type=int, default=2)
-    parser.add_argument("--format", default="lerobot-v2.1")
+    parser.add_argument("--runs", type=positive, default=3)
+    parser.add_argument("--tasks", type=positive, default=8, help="training tasks sampled")
+    parser.add_argument("--episodes-per-task", type=positive, default=2)
+    parser.add_argument("--format", choices=FORMATS, default="lerobot-v2.1")
+    parser.add_argument("--projection-tasks", type=positive, metavar="N",
+                        help="training tasks whose mean demonstration length gives the "
+                             "projection (default: every one)")
     parser.add_argument("--json", help="write the figures to this file")
     args = parser.parse_args(argv)
-    compiled = compile_specs(builtin_specs())
+    compiled = release.benchmark()
     labels = _labels(args.tasks)
     options = Options(args.format, args.episodes_per_task, tuple(labels), 320, 240, "sample",
                       compiled.spec.digest)
@@ -143,15 +152,15 @@ def main(argv: list[str] | None = None) -> int:
               f"episodes, {frames} frames), peak memory per worker "
               f"{figures[f'workers_{workers}']['peak_mb_per_worker']:.0f} MB")
     with tempfile.TemporaryDirectory() as folder:
-        kept = Path(folder) / "demos"
-        timed_generation(options, 1, kept)
+        kept = Path(folder) / "demos"  # the same frames, in the format bare_seconds reads
+        timed_generation(dataclasses.replace(options, format="lerobot-v2.1"), 1, kept)
         bare = [bare_seconds(kept, 320, 240) for _ in range(args.runs)]
     bare_median = statistics.median(bare)
     ratio = figures["workers_1"]["seconds"] / bare_median
     figures["bare_seconds"], figures["ratio_to_bare"] = bare_median, ratio
     print(f"bare physics + 3 renders of the same frames: {bare_median:.1f} s -> generation "
           f"costs {ratio:.2f}x bare")
-    length = mean_length()
+    length = mean_length(_labels(args.projection_tasks or len(compiled.spec.tasks)))
     full_frames = length * FULL_PER_TASK * len(compiled.spec.tasks)
     projected = full_frames / figures["workers_2"]["frames_per_s"]
     figures["mean_length"], figures["projected_full_hours"] = length, projected / 3600

@@ -15,15 +15,14 @@ import dataclasses
 import statistics
 import time
 from functools import partial
-from pathlib import Path
 
 import robofollow  # noqa: F401  (before MuJoCo: headless GL default)
-from robofollow.benchmark.pipeline import compile_specs
-from robofollow.benchmark.rounds import find_episode
+from robofollow import release
+from robofollow.cli.common import positive
 from robofollow.oracle.score import score
+from robofollow.scoring import score_recording
 from robofollow.sim.rollout import run_expert
 
-ROOT = Path(__file__).resolve().parent.parent
 KINDS = ["scene1/L0/pickup_yellow_block_2#r1",
          "scene1/L0/place_yellow_block_1_behind_red_cylinder#r1",
          "scene2/L0/push_left_cube_to_red_cylinder#r1",
@@ -53,29 +52,31 @@ def median_ms(call, repeats: int) -> float:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--repeats", type=int, default=200)
-    parser.add_argument("--frames", type=int, default=500)
+    parser.add_argument("--repeats", type=positive, default=200)
+    parser.add_argument("--frames", type=positive, default=500,
+                        help="frames each recording is padded to (at least its length)")
     args = parser.parse_args()
-    compiled = compile_specs(ROOT / "specs")
+    benchmark = release.benchmark()  # the current release, as `robofollow score` reads it
     print(f"{'episode':<68}{'alone ms':>9}{'+ did-instead ms':>18}{'frames/s':>11}")
     alone_all, full_all = [], []
     for episode_id in KINDS:
-        record = find_episode(compiled, episode_id)
-        scene = compiled.spec.scenes[record.scene]
-        trajectory = padded(run_expert(compiled, record).trajectory, args.frames)
-        behaviour = record.behaviour
-        candidates = compiled.candidates(record.scene)
-        result = score(behaviour, trajectory, scene, candidates=candidates)
+        record = benchmark.record(episode_id)
+        recording = run_expert(benchmark, record).trajectory
+        if len(recording) > args.frames:
+            parser.error(f"--frames {args.frames}: {episode_id}'s recording has "
+                         f"{len(recording)} frames")
+        trajectory = padded(recording, args.frames)
+        result = score_recording(benchmark, record, trajectory)
         assert result.complete and result.intent_score == 1.0, (episode_id, result.failures)
-        alone = median_ms(partial(score, behaviour, trajectory, scene), args.repeats)
-        full = median_ms(partial(score, behaviour, trajectory, scene, candidates=candidates),
-                         args.repeats)
+        alone = median_ms(partial(score, record.behaviour, trajectory,
+                                  benchmark.spec.scenes[record.scene]), args.repeats)
+        full = median_ms(partial(score_recording, benchmark, record, trajectory), args.repeats)
         alone_all.append(alone)
         full_all.append(full)
         print(f"{episode_id:<68}{alone:>9.2f}{full:>18.2f}{args.frames / full * 1000:>11.0f}")
     print(f"median over kinds: {statistics.median(alone_all):.2f} ms alone, "
           f"{statistics.median(full_all):.2f} ms with did-instead matching "
-          f"({len(candidates)} candidates in the last scene); worst "
+          f"({len(benchmark.candidates(record.scene))} candidates in the last scene); worst "
           f"{max(full_all):.2f} ms (target < 5 ms per {args.frames}-frame trajectory)")
 
 

@@ -16,6 +16,7 @@ import statistics
 import time
 from pathlib import Path
 
+from robofollow.cli.common import positive
 from robofollow.compiler.language import parser
 
 DATA = Path(__file__).resolve().parent.parent / "tests" / "data"
@@ -34,8 +35,8 @@ def main() -> None:
                                    formatter_class=argparse.RawDescriptionHelpFormatter)
     args.add_argument("--corpus", choices=("training", "stress"), default="training",
                       help="the instructions to parse")
-    args.add_argument("--runs", type=int, default=7, help="timed runs (median reported)")
-    args.add_argument("--repeat", type=int, default=20, help="passes over the set per run")
+    args.add_argument("--runs", type=positive, default=7, help="timed runs (median reported)")
+    args.add_argument("--repeat", type=positive, default=20, help="passes over the set per run")
     options = args.parse_args()
     if hasattr(os, "sched_setaffinity"):
         os.sched_setaffinity(0, {min(os.sched_getaffinity(0))})

@@ -27,6 +27,7 @@ import time
 from pathlib import Path
 
 from robofollow import release
+from robofollow.cli.common import positive
 from robofollow.resources import builtin_specs, releases_dir
 
 TASK = "scene2/L0/pickup_left_cube"
@@ -78,7 +79,7 @@ def eval_start(runs: int, cache: str) -> dict[str, list[float]]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--runs", type=positive, default=5)
     parser.add_argument("--json", metavar="FILE")
     args = parser.parse_args()
     files = size()

@@ -9,10 +9,14 @@ Reports medians over runs of:
   - the env's cost as a ratio to bare MuJoCo doing the same work in the same run: the same
     physics steps plus rendering the same three frames with a bare mujoco.Renderer
     (target <= 1.15).
+The episode is the current release's first in the layout, as the env reads it.
 """
 
 from __future__ import annotations
 
+import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
+
+# isort: split
 import argparse
 import multiprocessing
 import statistics
@@ -21,10 +25,10 @@ import time
 import mujoco
 import numpy as np
 
-import robofollow  # noqa: F401  (first: it sets MUJOCO_GL before mujoco loads)
+from robofollow import release
 from robofollow.benchmark.episode import Episode
-from robofollow.benchmark.pipeline import compile_specs
-from robofollow.resources import builtin_specs
+from robofollow.cli.common import positive, scene_layout
+from robofollow.errors import RoboFollowError
 from robofollow.sim import robot
 from robofollow.sim.cameras import CAMERA_NAMES
 from robofollow.sim.env import RoboFollowEnv
@@ -32,14 +36,17 @@ from robofollow.sim.simulation import SUBSTEPS, Simulation
 
 
 def _episode_of(scene: str, layout: str) -> Episode:
-    from robofollow.benchmark.rounds import all_episodes
-
-    return next(e for e in all_episodes(compile_specs(builtin_specs()))
-                if e.scene == scene and e.layout == layout)
+    """The first episode of the current release (what the env reads) in this layout."""
+    benchmark = release.benchmark()
+    found = next((e for e in benchmark.episodes(lambda i: i.startswith(f"{scene}/"))
+                  if e.layout == layout), None)
+    if found is None:
+        raise RoboFollowError(f"release {benchmark.release} has no episode in {scene}/{layout}")
+    return found
 
 
 def raw_physics(scene: str, layout: str, steps: int) -> float:
-    sim = Simulation(compile_specs(builtin_specs()).spec.scenes[scene], layout)
+    sim = Simulation(release.benchmark().spec.scenes[scene], layout)
     sim.reset(0)
     sim.apply(robot.home_state())
     began = time.perf_counter()
@@ -76,13 +83,14 @@ def env_rate(episode: Episode, steps: int) -> float:
 
 def bare_rate(episode: Episode, steps: int) -> float:
     """The same physics and frames with nothing of RoboFollow in the loop."""
-    scene = compile_specs(builtin_specs()).spec.scenes[episode.scene]
-    sim = Simulation(scene, episode.layout)
+    sim = Simulation(release.benchmark().spec.scenes[episode.scene], episode.layout)
     sim.reset(episode.seed)
     model, data = sim.model, sim.data
     renderer = mujoco.Renderer(model, 240, 320)
-    ctrl = [np.r_[a[:6], [a[6] * robot.FINGER_TRAVEL] * 2, a[7:13], [a[13] * robot.FINGER_TRAVEL] * 2]
-            for a in _actions(steps)]
+    ctrl = []
+    for action in _actions(steps):  # each action's actuator targets, as the env sets them
+        sim.apply(action)
+        ctrl.append(data.ctrl.copy())
     began = time.perf_counter()
     for c in ctrl:
         data.ctrl[:] = c
@@ -101,12 +109,16 @@ def _env_loop_job(args) -> tuple[float, float]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--runs", type=int, default=5)
-    parser.add_argument("--steps", type=int, default=150)
+    parser.add_argument("--runs", type=positive, default=5)
+    parser.add_argument("--steps", type=positive, default=150)
     parser.add_argument("--scene", default="scene4")
     parser.add_argument("--layout", default="scene4_1")
     args = parser.parse_args()
-    episode = _episode_of(args.scene, args.layout)
+    try:
+        scene_layout(release.benchmark(), args.scene, args.layout)
+        episode = _episode_of(args.scene, args.layout)
+    except RoboFollowError as error:
+        parser.error(str(error))
     raw = [raw_physics(args.scene, args.layout, 20000) for _ in range(args.runs)]
     envs, bares, ratios = [], [], []
     for _ in range(args.runs):

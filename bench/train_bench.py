@@ -25,7 +25,12 @@ import time
 
 import numpy as np
 
+from robofollow.cli.common import positive
+from robofollow.learn.options import KINDS, reads_objects
+from robofollow.sim.cameras import CAMERA_NAMES
+
 EPISODES, LENGTH = 80, 150
+IMAGE_KINDS = tuple(kind for kind in KINDS if not reads_objects(kind))  # what is synthesised
 
 
 def synthetic(cameras: tuple[str, ...], factor: int):
@@ -52,10 +57,11 @@ def measure(kind: str, cameras: tuple[str, ...], factor: int, steps: int, runs: 
 
     options = TrainOptions(dataset="synthetic", kind=kind, cameras=cameras, factor=factor)
     prepared = arrange(synthetic(cameras, factor), options)
-    arch = Architecture(kind, cameras, (240 // factor, 320 // factor), len(prepared.vocab))
-    params = init(arch, 0)
-    moments = ({k: np.zeros_like(v) for k, v in params.items()},
-               {k: np.zeros_like(v) for k, v in params.items()})
+    # the network and its start, as `train` makes them for these options
+    arch = Architecture(options.kind, cameras, prepared.demos.images[cameras[0]].shape[1:3],
+                        len(prepared.vocab), chunk=options.chunk)
+    params = init(arch, options.seed)
+    moments = tuple({k: np.zeros_like(v) for k, v in params.items()} for _ in range(2))
     step, _ = compiled_steps(arch, options, 10 * steps * runs)
     batches = Batches(prepared, options)
     params, moments, value = step(params, moments, batches.batch(0), 0)  # compile
@@ -89,15 +95,19 @@ def measure(kind: str, cameras: tuple[str, ...], factor: int, steps: int, runs: 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__,
                                      formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--runs", type=int, default=3)
-    parser.add_argument("--steps", type=int, default=30)
+    parser.add_argument("--runs", type=positive, default=3)
+    parser.add_argument("--steps", type=positive, default=30)
     parser.add_argument("--cameras", default="cam_high")
-    parser.add_argument("--factor", type=int, default=4)
-    parser.add_argument("--kinds", default="text,blind,form")
+    parser.add_argument("--factor", type=positive, default=4)
+    parser.add_argument("--kinds", default=",".join(IMAGE_KINDS))
     parser.add_argument("--one", help=argparse.SUPPRESS)  # measure one kind in this process
     parser.add_argument("--pin", type=int, help=argparse.SUPPRESS)  # on this many cores
     args = parser.parse_args()
     cameras = tuple(args.cameras.split(","))
+    for option, names, known in (("--kinds", args.kinds.split(","), IMAGE_KINDS),
+                                 ("--cameras", cameras, CAMERA_NAMES)):
+        if not set(names) <= set(known):
+            parser.error(f"{option} {','.join(names)}: expected some of {', '.join(known)}")
     if args.one:
         os.sched_setaffinity(0, sorted(os.sched_getaffinity(0))[:args.pin])
         print(json.dumps(measure(args.one, cameras, args.factor, args.steps, args.runs)))
