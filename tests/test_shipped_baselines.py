@@ -1,14 +1,19 @@
 """The five full-benchmark baselines ship with the package and reproduce their recorded runs:
 for each, 8 round-1 episodes of different scenes and levels, run again by name
 (`robofollow reproduce RUN --policy baseline:NAME`), give the Intent, Execution and completion
-recorded in docs/results/baselines/NAME/scores.csv.gz on any allowed versions, and the same
-trajectory hashes where the environment matches the recorded one (provenance.ARITHMETIC:
-inference runs through NumPy's matrix products, the physics through MuJoCo). So do the two
-objects kinds' second-seed checkpoints, shipped with their runs in
+recorded in docs/results/baselines/NAME/scores.csv.gz and the same trajectory hashes where the
+environment matches the recorded one (provenance.ARITHMETIC: inference runs through NumPy's
+matrix products, the physics through MuJoCo). On another arithmetic (another CPU: NumPy's
+matrix kernels differ) a rollout drifts from the recorded one, and an episode near a stage's
+threshold can score otherwise with it (an AMD EPYC re-running the blind baseline, recorded on
+another CPU: 1 of its 8); there the differences are reported, and more than a quarter of the
+episodes scoring otherwise (a checkpoint that loads wrong, a scorer that changed) fails. So do
+the two objects kinds' second-seed checkpoints, shipped with their runs in
 docs/results/baselines/KIND-seed1/checkpoint."""
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import pytest
@@ -43,12 +48,18 @@ def sampled(records: list[dict], offset: int) -> list[dict]:
 
 
 def reproduces(policy: str, run: Path, recorded: list[dict]) -> None:
-    """Run the recorded episodes again: scores agree, and hashes where the environment
-    matches."""
+    """Run the recorded episodes again: scores and hashes agree where the environment matches;
+    elsewhere what differs is named, and at most a quarter of the scores."""
     found = reproduce(shipped(), run, policy=policy,
                       episodes=[r["episode"] for r in recorded])
-    assert found.hashes_compared == SAMPLED and not found.score_differences, found.text()
-    assert found.agrees, found.text()
+    assert found.hashes_compared == SAMPLED, found.text()
+    if found.environment_matches:
+        assert found.agrees, found.text()
+    else:
+        assert found.environment_differences, found.text()
+        assert len(found.score_differences) <= SAMPLED // 4, found.text()
+        if found.score_differences:
+            warnings.warn(f"another arithmetic: {found.text()}", stacklevel=2)
 
 
 @pytest.mark.parametrize("offset,name", enumerate(FULL))

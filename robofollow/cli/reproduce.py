@@ -14,7 +14,8 @@ def add_reproduce(commands) -> None:
         "reproduce", help="re-run recorded episodes of a run and check they agree",
         description="Run N recorded episodes of a finished (or saved) run again, spread over "
                     "its scene x level cells, and compare them with the records: the scores "
-                    "(Intent, Execution, completion) must agree on any machine; the "
+                    "(Intent, Execution, completion) must agree (on another CPU a rollout can drift, "
+                    "and an episode near a threshold score otherwise with it); the "
                     "trajectory hashes must agree bit for bit where the run's recorded "
                     "environment (Python, NumPy, MuJoCo, JAX, CPU: RUN/run.json's provenance) "
                     "matches this one, and otherwise the versions that differ are named. "

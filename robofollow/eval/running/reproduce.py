@@ -1,10 +1,13 @@
 """`robofollow reproduce`: run recorded episodes of a finished run again and say what agrees.
 
 Scores (Intent, Execution, completion, as the score file keeps them: four decimals) must
-agree on any machine and any allowed version. Trajectory hashes (runner.trajectory_hash) agree
-bit for bit only where the arithmetic is the same: where the run recorded its environment
-and this one matches it in every field of provenance.ARITHMETIC, a differing hash is a
-failure; elsewhere the hashes are compared and reported, and the fields that differ named."""
+agree. Trajectory hashes (runner.trajectory_hash) agree bit for bit only where the arithmetic
+is the same: where the run recorded its environment and this one matches it in every field of
+provenance.ARITHMETIC, a differing hash is a failure; elsewhere the hashes are compared and
+reported, and the fields that differ named. On another arithmetic (another CPU: NumPy's matrix
+kernels differ) a learned policy's rollout drifts from the recorded one, and an episode near a
+stage's threshold can score otherwise with it: the report then says that the environment
+differs beside the scores that do."""
 
 from __future__ import annotations
 
