@@ -10,6 +10,7 @@ import json
 import shutil
 from dataclasses import replace
 from pathlib import Path
+from xml.etree import ElementTree
 
 import pytest
 
@@ -277,3 +278,26 @@ def test_a_report_rebuild_cut_short_leaves_every_figure_whole(tmp_path, monkeypa
     with pytest.raises(KeyboardInterrupt):
         write_report(copy)
     assert {p.name: p.read_bytes() for p in (copy / "figures").iterdir()} == before
+
+
+def test_a_report_defines_the_levels_and_says_when_no_stage_failed(tmp_path):
+    """What a newcomer asked of the expert's report: every level said in words beside Table 1,
+    and no empty table of first failed stages when every episode passed; the levels figure
+    keeps its legend beside the panels, off the bars."""
+    passed = _folder(tmp_path / "passed", _records("L0", 3, 1.0, 0.25))
+    failed = _folder(tmp_path / "failed", _records("L0", 3, 0.0, 0.25))
+    for run in (passed, failed):
+        write_report(run)
+    for page in ("report.md", "report.html"):
+        text = (passed / page).read_text()
+        assert "L0: every training task on its training layout; L1: the training " \
+               "instructions on changed layouts; L2: new wordings on the training layouts; " \
+               "L3: both, new wordings on changed layouts." in text, page
+        assert "None: every episode passed every stage." in text, page
+        assert "None: every episode passed" not in (failed / page).read_text(), page
+    assert "| Stage | Episodes | Most common reasons |" in (failed / "report.md").read_text()
+    assert "| Stage |" not in (passed / "report.md").read_text()
+    svg = ElementTree.fromstring((passed / "figures" / "levels.svg").read_text())
+    parents = {child: parent for parent in svg.iter() for child in parent}
+    legend = next(element for element in svg.iter() if element.get("id") == "legend_1")
+    assert not parents[legend].get("id", "").startswith("axes_")  # the figure's, not a panel's

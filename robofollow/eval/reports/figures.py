@@ -98,7 +98,8 @@ def _levels(data: dict, folder: Path) -> dict:
         ax.set_title(metric)
         ax.set_ylim(0, 105)
     axes[0].set_ylabel("score (0-100)")
-    axes[-1].legend(fontsize=7, frameon=False, loc="upper right")
+    figure.legend(*axes[0].get_legend_handles_labels(), fontsize=7, frameon=False,
+                  loc="outside right upper")  # (beside the panels: inside, it hid bars)
     return _save(figure, folder, "levels",
                  f"IS, ES and CR per level and scene; {WHISKERS}; black ticks: chance (a "
                  "language-blind guess). n per bar: its cell's tasks × rounds (Table 1).")
