@@ -24,7 +24,7 @@ from robofollow.compiler.language import lf
 from robofollow.compiler.scene import spec, workspace
 from robofollow.compiler.splits.task_rules import _GROUNDED_RULES
 from robofollow.compiler.splits.wordings import GENERATORS
-from robofollow.resources import grammar_text
+from robofollow.resources import builtin_specs, grammar_text
 
 DOC = Path(__file__).resolve().parent.parent / "docs" / "spec-language.md"
 
@@ -240,3 +240,34 @@ def test_every_error_code_the_compiler_raises_is_in_the_error_table():
     table = table[:table.index("\n\n")]
     assert len(codes) > 30
     assert sorted(code for code in codes if f"`{code}`" not in table) == []
+
+
+# ---------------------------------------------------------------- the words the rewordings use
+
+STYLE_WORDS = re.compile(r"<!-- style words -->\n(.*?)\n<!-- /style words -->", re.S)
+DESCRIBED = {"COLOR", "NOUN", "NOUNS", "SIZE", "EXTREME"}  # (the scene's bodies: its own words)
+
+
+def _style_words() -> str:
+    """The table docs/spec-language.md gives: per kind of instruction, the words the four
+    styles say the shipped training tasks' forms with, beyond the bodies' descriptions."""
+    from robofollow.compiler.language.realize import STYLES, realize
+    from robofollow.compiler.splits.wordings import concepts
+
+    loaded = load_partial(builtin_specs())
+    words: dict[str, set[str]] = {}
+    for task in loaded.spec.tasks:
+        for style in sorted(STYLES):
+            words.setdefault(task.forms[0].type, set()).update(
+                value for kind, value in concepts(realize(task.forms[0], style))
+                if kind not in DESCRIBED)
+    rows = ["| instruction | words the styles use (beyond colours, sizes, nouns, extremes) |",
+            "|---|---|"]
+    rows += [f"| {kind} | {', '.join(sorted(found))} |" for kind, found in sorted(words.items())]
+    return "\n".join(rows)
+
+
+def test_the_docs_list_the_words_the_rewordings_use():
+    found = STYLE_WORDS.search(_doc())
+    assert found, "docs/spec-language.md has no <!-- style words --> table"
+    assert found.group(1) == _style_words(), "\n" + _style_words()
