@@ -35,6 +35,7 @@ from dataclasses import dataclass, replace
 from functools import cache, cached_property, lru_cache
 from importlib import metadata
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from robofollow.benchmark.episode import Episode
 from robofollow.compiler.authoring.spec_files import spec_files
@@ -48,6 +49,9 @@ from robofollow.compiler.scene.spec import (
 )
 from robofollow.files import read_file_at_most
 from robofollow.resources import cache_root
+
+if TYPE_CHECKING:
+    from robofollow.benchmark.compiled import Compiled
 
 FORMAT = 3  # bump when the file layout or the records' meaning changes
 KEEP = 64  # cache files kept (the newest); older ones are removed when one is written
@@ -76,7 +80,7 @@ class FilePart:
     ids: tuple[str, ...]
     lines: tuple[bytes, ...]
     build: bytes
-    made: tuple | None = None  # (compiled.Compiled, its rendered files)
+    made: tuple[Compiled, dict[str, str]] | None = None  # (the compile, its rendered files)
 
 
 @dataclass(frozen=True)
@@ -201,12 +205,11 @@ def load(specs: Path) -> Episodes:
     if found is None:
         return _whole(specs)
     spec, parts = found
-    return Episodes(spec, {label: b for part in parts for label, b in part.training.items()},
-                    tuple(i for part in parts for i in part.ids),
+    return Episodes(spec, _training(parts), tuple(i for part in parts for i in part.ids),
                     tuple(line for part in parts for line in part.lines))
 
 
-def build(specs: Path):
+def build(specs: Path) -> tuple[Compiled, dict[str, str]]:
     """What `robofollow compile` writes, from the same parts as `load`: the compiled benchmark
     of `specs` (a `compiled.Compiled`, as one compile of the whole folder gives it) and its
     `render.rendered` files. Raises SpecErrors on bad specs."""
@@ -234,11 +237,15 @@ def build(specs: Path):
                         rejected=tuple(rejections.validate_json(f"[{','.join(rejected)}]")))
         pieces.append(Part(splits, content["report"]))
         files.append(episode_files(part.scenes, part.ids, part.lines) | content["files"])
-    training = {label: b for part in parts for label, b in part.training.items()}
-    return assemble(spec, training, pieces), joined(files)
+    return assemble(spec, _training(parts), pieces), joined(files)
 
 
-def _build_whole(specs: Path):
+def _training(parts: tuple[FilePart, ...]) -> dict[str, Behaviour]:
+    """The parts' training behaviours by label, in file order."""
+    return {label: b for part in parts for label, b in part.training.items()}
+
+
+def _build_whole(specs: Path) -> tuple[Compiled, dict[str, str]]:
     """`build` of the specs compiled together, uncached."""
     from robofollow.benchmark.pipeline import compile_specs
     from robofollow.benchmark.render import rendered
@@ -323,7 +330,7 @@ def _why(folder: Path, entry: Entry) -> str:
     return "spec changed" if names else "not cached"
 
 
-def _compile(entry: Entry) -> tuple[bytes, object, dict[str, str]] | None:
+def _compile(entry: Entry) -> tuple[bytes, Compiled, dict[str, str]] | None:
     """One spec file compiled alone: its cache file's bytes, the compile and its rendered
     files; None when it has errors."""
     from robofollow.benchmark.output import episode_files

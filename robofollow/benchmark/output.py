@@ -131,9 +131,8 @@ def write(compiled: Compiled, out: Path, files: dict[str, str]) -> str:
     """Write the build under `out` (created if needed): `files` (`render.rendered`),
     audit.json and summary.txt, replacing the build there whole once the new one is
     complete; the summary written (`summary.summary`, with what changed against that build).
-    On an
-    OSError (a full disk) nothing is left half-written: the previous build stays, and an
-    OutputError says what failed."""
+    On an OSError (a full disk) nothing is left half-written: the previous build stays, and
+    an OutputError says what failed."""
     check_out(out)
     target = _target(out)
     changed = changes(_task_ids(target) if target.is_dir() else set(), compiled)
