@@ -3,7 +3,9 @@
 - the jitter check asks once for the worlds where no body a form reads has moved, and shares
   what reads no position among a layout's jittered worlds: its verdict (case, error or the
   objects picked instead) is the one of trying every world with fresh grounders;
-- one Realizer speaking many forms (its phrases memoised) says what a fresh one says.
+- one Realizer speaking many forms (its phrases memoised) says what a fresh one says;
+- a style is not tried on a conditional one of whose branches it cannot say in training words:
+  the splits and rejections are those of trying every style.
 """
 
 from __future__ import annotations
@@ -102,3 +104,30 @@ def test_one_realizer_says_what_fresh_ones_say():
         speaker = Realizer(style)
         for form in forms + forms:  # the second pass reads the memo
             assert speaker.instruction(form) == realize(form, name)
+
+
+def test_skipping_the_styles_a_branch_cannot_say_gives_what_speaking_every_style_gives(
+        monkeypatch):
+    """The generator does not speak a conditional in a style one of whose branches says a word
+    no training instruction uses: Scene 4's splits and rejections are those of speaking every
+    style, and the shortcut is taken."""
+    from pathlib import Path
+
+    from robofollow.compiler.authoring.spec_loader import load_spec
+    from robofollow.compiler.splits import generator
+    from robofollow.compiler.splits.training import check_training
+
+    spec = load_spec(Path(__file__).resolve().parent.parent / "specs" / "scene4.rf")
+    training = check_training(spec)
+    taken = []
+    shortcut = generator._Generator.branch_unsaid
+
+    def counted(self, form, style):
+        taken.append(shortcut(self, form, style))
+        return taken[-1]
+
+    monkeypatch.setattr(generator._Generator, "branch_unsaid", counted)
+    short = generator.generate(spec, training)
+    monkeypatch.setattr(generator._Generator, "branch_unsaid", lambda self, form, style: False)
+    plain = generator.generate(spec, training)
+    assert short == plain and sum(taken) > 1000

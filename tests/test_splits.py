@@ -227,7 +227,7 @@ def test_training_tasks_left_without_a_rewording_are_named_with_the_words_missin
                 if line.startswith("training tasks with no L2 or L3 rewording kept"))
     l2 = next(line for line in lines[head + 1:] if line.startswith("  scene4 L2: "))
     kept = {t.origin for t in compiled.splits.of("scene4", "L2")}
-    assert "s41_l_pick_blue_not_cube" in l2 and "s41_l_pick_blue_not_cube" not in kept
+    assert "s41_l_pick_ball_not_leftmost" in l2 and "s41_l_pick_ball_not_leftmost" not in kept
     assert "words training never uses: rightmost" in l2
     training = {t.label for t in compiled.spec.tasks}
     capped = {r.origin for r in compiled.splits.rejected

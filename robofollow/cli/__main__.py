@@ -1,7 +1,5 @@
 """`python -m robofollow.cli`."""
 
-import sys
+from robofollow.cli import run
 
-from robofollow.cli import main
-
-sys.exit(main())
+run()

@@ -200,6 +200,10 @@ _MODIFIER_STARTS = frozenset({
 })
 # A separator right before these is implied by them ("A; otherwise B", "A, if not, B").
 _ABSORBING = frozenset({"OTHERWISE", "IF"})
+# The terminals a word gets from the tokens around it (`_terminals`): a phrase says every
+# other (terminal, value) it holds wherever it stands.
+CONTEXTUAL = frozenset({"AND", "AND_MOD", "AND_NP", "NOT", "NOT_GOING", "PLEASE", "PLEASE_END",
+                        *_SEPARATORS})
 
 _WORD_OR_MARK = re.compile(r"[A-Za-z]+(?:['’][A-Za-z]+)?(?:-[A-Za-z]+)*|[,;.!?]|\S")
 

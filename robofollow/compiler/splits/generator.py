@@ -17,16 +17,24 @@ are kept first and count toward the rule's `max`.
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass, field
+from collections.abc import Iterator
+from dataclasses import dataclass
 
 from robofollow.compiler.language import lf
+from robofollow.compiler.language.lexicon import CONTEXTUAL
 from robofollow.compiler.language.realize import STYLES, Realizer
 from robofollow.compiler.scene.behaviour import Behaviour
 from robofollow.compiler.scene.observation import look_alike
 from robofollow.compiler.scene.spec import Level, Scene, Spec
 from robofollow.compiler.splits.task_rules import TaskRules, arms_of
 from robofollow.compiler.splits.tasks import Rejection, Splits, TestTask
-from robofollow.compiler.splits.wordings import GENERATORS, Describer, concepts
+from robofollow.compiler.splits.wordings import (
+    GENERATORS,
+    Describer,
+    Rank,
+    concepts,
+    round_robin,
+)
 
 MOVED_LEVELS = ("L1", "L3")  # levels whose tasks say whether the referent's motion moved
 _STYLES = sorted(STYLES)
@@ -36,19 +44,36 @@ def _digest_of(task_id: str) -> str:
     return hashlib.sha256(task_id.encode()).hexdigest()
 
 
-def _variants(form: lf.Instruction, describer: Describer, wordings: tuple[str, ...]):
-    """(wording, form) from each generator alone, then from each ordered pair of the
-    generators that reword one aspect ('referents' alone already varies every object)."""
-    for wording in wordings:
-        for novel in GENERATORS[wording](form, describer):
-            yield wording, novel
+def _rank(source: str) -> Rank:
+    """The sort key of a choice's canonical text for one source's candidates: the digest of
+    both, so the order is fixed by the source and its choices alone."""
+    return lambda text: hashlib.sha256(f"{source}\0{text}".encode()).hexdigest()
+
+
+def _variants(form: lf.Instruction, describer: Describer, wordings: tuple[str, ...],
+              rank: Rank) -> Iterator[tuple[str, lf.Instruction]]:
+    """(wording, form), lazily, the generators taking turns: each generator alone, then each
+    ordered pair of the generators that reword one aspect ('referents' alone already varies
+    every object), each in rank order."""
+    streams = [_alone(form, describer, wording, rank) for wording in wordings]
     composable = [w for w in wordings if w != "referents"]
-    for index, first in enumerate(composable):
-        middles = list(GENERATORS[first](form, describer))
-        for second in composable[index + 1:]:
-            for middle in middles:
-                for novel in GENERATORS[second](middle, describer):
-                    yield f"{first}+{second}", novel
+    streams += [_paired(form, describer, first, second, rank)
+                for index, first in enumerate(composable) for second in composable[index + 1:]]
+    return round_robin(streams)
+
+
+def _alone(form: lf.Instruction, describer: Describer, wording: str,
+           rank: Rank) -> Iterator[tuple[str, lf.Instruction]]:
+    for novel in GENERATORS[wording](form, describer, rank):
+        yield wording, novel
+
+
+def _paired(form: lf.Instruction, describer: Describer, first: str, second: str,
+            rank: Rank) -> Iterator[tuple[str, lf.Instruction]]:
+    """The `second` generator's forms of each of the `first` generator's forms."""
+    for middle in GENERATORS[first](form, describer, rank):
+        for novel in GENERATORS[second](middle, describer, rank):
+            yield f"{first}+{second}", novel
 
 
 def motion_kind(rules: TaskRules, behaviour: Behaviour, layout: str, origin: str) -> str:
@@ -59,21 +84,23 @@ def motion_kind(rules: TaskRules, behaviour: Behaviour, layout: str, origin: str
 
 @dataclass
 class _Queue:
-    """One source's reworded candidates, (task id, wording, form, form JSON, form digest) in
-    id-digest order, examined in turn until the level's limit of them are kept."""
+    """One source's reworded candidates (`_variants`), each built when it is examined, until
+    the level's limit of them are kept."""
     origin: str
     layout: str
-    candidates: list[tuple[str, str, lf.Instruction, str, str]]
+    variants: Iterator[tuple[str, lf.Instruction]]
     examined: int = 0
     kept: int = 0
-    forms: dict[str, int] = field(init=False)  # form JSON -> its last place
+    exhausted: bool = False
 
-    def __post_init__(self):
-        self.forms = {c[3]: place for place, c in enumerate(self.candidates)}
+    def next(self) -> tuple[str, lf.Instruction] | None:
+        """The next candidate, or None once there are no more."""
+        found = next(self.variants, None)
+        self.exhausted = found is None
+        return found
 
     def done(self, limit: int | None) -> bool:
-        return self.examined == len(self.candidates) or (limit is not None
-                                                         and self.kept >= limit)
+        return self.exhausted or (limit is not None and self.kept >= limit)
 
 
 class _Generator:
@@ -92,6 +119,7 @@ class _Generator:
         self.rejected: list[Rejection] = []
         self.describers: dict[str, Describer] = {}
         self.spoken: dict[tuple[str, str], tuple[str, str | None]] = {}
+        self.unsaid: dict[tuple[int, str], tuple[lf.Body, bool]] = {}
         self.realizers = {name: Realizer(style) for name, style in STYLES.items()}
 
     def reject(self, level: Level, layout: str, instruction: str, origin: str,
@@ -158,12 +186,10 @@ class _Generator:
     def reworded(self, level: Level, sources: list[tuple[str, lf.Instruction, str]],
                  wordings: tuple[str, ...]) -> None:
         """Candidates for each (layout, form, origin) source from each generator, and from
-        each pair of generators in rule order; a source's queue is in the order the cap ranks
-        them (id digest) and stops at the level's limit of kept ones. The rules see the
-        queues as if one after the other, but only as far as the cap can choose: place by
-        place in the queues (every queue's next kept candidate) until the kept ones so far
-        fill the limit. A candidate waits for the verdicts of the earlier queues' candidates
-        that the duplicate rule weighs it against (its form on a layout that looks the same)."""
+        each pair of generators in rule order, taking turns (`_variants`); a source's queue
+        stops at the level's limit of kept ones. The queues take turns too, place by place
+        (every queue's next kept candidate, in source order) until the kept ones so far fill
+        the limit, and the rules weigh each candidate against the tasks kept before it."""
         limit = self.limit(level)
         queues = [self.queue(level, layout, form, origin, wordings)
                   for layout, form, origin in sources]
@@ -171,7 +197,7 @@ class _Generator:
         rank = 0
         while any(not queue.done(limit) for queue in queues):
             for index, queue in enumerate(queues):
-                while queue.kept <= rank and self.examine_next(level, queues, index, limit,
+                while queue.kept <= rank and self.examine_next(level, queue, index, limit,
                                                                order):
                     pass
             if limit is not None and sum(min(q.kept, rank + 1) for q in queues) >= limit:
@@ -183,34 +209,25 @@ class _Generator:
 
     def queue(self, level: Level, layout: str, form: lf.Instruction, origin: str,
               wordings: tuple[str, ...]) -> _Queue:
-        """One source's candidates, in id-digest order."""
+        """One source's candidates, in the order its rank gives (`_variants`)."""
         if layout not in self.describers:
             self.describers[layout] = Describer(self.rules.grounders(layout)[0],
                                                 self.constructs)
-        candidates = []
-        for wording, novel in _variants(form, self.describers[layout], wordings):
-            data = lf.to_json(novel)
-            digest = hashlib.sha256(data.encode()).hexdigest()
-            task_id = f"{self.scene.id}/{level}/{origin}@{layout}/{wording}-{digest[:8]}"
-            candidates.append((_digest_of(task_id), task_id, wording, novel, data, digest))
-        return _Queue(origin, layout, [c[1:] for c in sorted(candidates, key=lambda c: c[:2])])
+        rank = _rank(f"{self.scene.id}/{level}/{origin}@{layout}")
+        return _Queue(origin, layout, _variants(form, self.describers[layout], wordings, rank))
 
-    def examine_next(self, level: Level, queues: list[_Queue], index: int, limit: int | None,
+    def examine_next(self, level: Level, queue: _Queue, index: int, limit: int | None,
                      order: dict[str, tuple[int, int]]) -> bool:
-        """Speak and consider queue `index`'s next candidate, after the earlier queues'
-        candidates of its form on a layout that looks the same; whether there was one."""
-        queue = queues[index]
-        if queue.done(limit):
+        """Speak and consider the queue's next candidate; whether there was one."""
+        found = None if queue.done(limit) else queue.next()
+        if found is None:
             return False
+        wording, novel = found
         place = queue.examined
-        task_id, wording, novel, data, digest = queue.candidates[place]
-        for other, other_queue in enumerate(queues[:index]):
-            if data in other_queue.forms and self.rules.seen.looks_same(queue.layout,
-                                                                        other_queue.layout):
-                while (other_queue.examined <= other_queue.forms[data]
-                       and self.examine_next(level, queues, other, limit, order)):
-                    pass
         queue.examined += 1
+        data = lf.to_json(novel)
+        digest = hashlib.sha256(data.encode()).hexdigest()
+        task_id = f"{self.scene.id}/{level}/{queue.origin}@{queue.layout}/{wording}-{digest[:8]}"
         text, problem = self.speak(novel, data, int(digest[:8], 16), queue.layout)
         if problem:
             self.reject(level, queue.layout, text, queue.origin, problem)
@@ -226,7 +243,10 @@ class _Generator:
         training words and reads as it is scored; else the first style's text and why not."""
         first = None
         for offset in range(len(_STYLES)):
-            text, problem = self.words(form, form_json, _STYLES[(pick + offset) % len(_STYLES)])
+            style = _STYLES[(pick + offset) % len(_STYLES)]
+            if offset and self.branch_unsaid(form, style):
+                continue  # (the instruction says that word too: no need to speak it)
+            text, problem = self.words(form, form_json, style)
             if problem is None:
                 problems = self.rules.wording(layout, text, form, form_json)
                 problem = f"wording: {problems[0]}" if problems else None
@@ -247,22 +267,42 @@ class _Generator:
                                       f"uses {words}" if unknown else None)
         return self.spoken[key]
 
+    def branch_unsaid(self, form: lf.Instruction, style: str) -> bool:
+        """Whether a branch of a conditional form says, in this style, a word no training
+        instruction of the scene uses, whatever surrounds it (`lexicon.CONTEXTUAL` aside): then
+        the instruction does too, as it says its branches word for word. (Most conditions and
+        branches rewordings of a conditional keep a branch that some styles cannot say.)"""
+        if not isinstance(form, lf.Conditional):
+            return False
+        for body in (form.then, form.otherwise):
+            if body is None:
+                continue
+            key = id(body), style  # (the entry keeps its body alive: an id is not reused)
+            hit = self.unsaid.get(key)
+            if hit is None or hit[0] is not body:
+                unknown = concepts(self.realizers[style].body(body)) - self.vocabulary
+                hit = self.unsaid[key] = body, any(terminal not in CONTEXTUAL
+                                                   for terminal, _ in unknown)
+            if hit[1]:
+                return True
+        return False
+
     def cap(self, level: Level) -> None:
         """Keep at most the rule's `max` tasks of a level, listed tests first, then generated
         ones spread over the (training task, layout) pairs they come from: a task ranks by its
-        place in its pair's queue (ordered by id digest), then by its own id digest. The ranks
-        do not depend on other tasks, so a new task or layout displaces only as many tests as
-        it gets; the rest are rejected."""
+        place among its pair's kept tasks (the order its queue examined them), then by its
+        own id digest. A pair's ranks do not depend on the other pairs' tasks, so a new task
+        or layout displaces only as many tests as it gets; the rest are rejected."""
         limit = self.limit(level)
         tasks = [t for t in self.tasks if t.level == level and t.wording != "listed"]
         if limit is None or len(tasks) <= limit:
             return
-        queues: dict[tuple[str, str], int] = {}
+        places: dict[tuple[str, str], int] = {}
         ranked = []
-        for task in sorted(tasks, key=lambda t: (_digest_of(t.id), t.id)):
+        for task in tasks:  # (a pair's tasks in the order its queue kept them)
             pair = task.origin, task.layout
-            queues[pair] = queues.get(pair, -1) + 1
-            ranked.append(((queues[pair], _digest_of(task.id)), task.id))
+            places[pair] = places.get(pair, -1) + 1
+            ranked.append(((places[pair], _digest_of(task.id)), task.id))
         chosen = {task_id for _, task_id in sorted(ranked)[:limit]}
         maximum = self.scene.splits[level].max_tasks
         for task in tasks:

@@ -1,16 +1,18 @@
 """Novel wordings for L2 and L3: new logical forms built from training concepts.
 
-Each generator takes a task's logical form and a Describer of the world it is said in, and
-yields other
-forms: other referring expressions for the same objects ("referents"), equivalent route and
-orientation wording ("routes", "orientation"), other or negated observable conditions
-("conditions") and swapped branches ("branches"). The split generator keeps a form only when
-it is new, its words are training words, and what it asks for is in the training repertoire.
+Each generator takes a task's logical form, a Describer of the world it is said in and a
+`Rank` (a sort key for a choice's canonical text), and lazily yields other forms: other
+referring expressions for the same objects ("referents"), equivalent route and orientation
+wording ("routes", "orientation"), other or negated observable conditions ("conditions") and
+swapped branches ("branches"). A generator offers its choices in rank order, taking turns
+among the places it rewords, so a form is built only when the split generator asks for the
+next one. The split generator keeps a form only when it is new, its words are training words,
+and what it asks for is in the training repertoire.
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterable, Iterator
 
 from robofollow.compiler.language import lf
 from robofollow.compiler.language.lexicon import terms
@@ -24,6 +26,22 @@ _NEARNESS = ("nearest", "farthest")
 _EXTREMES = ("leftmost", "rightmost")
 _SIDES = ("short", "long")
 _FACINGS = ("front", "back", "left", "right")
+
+Rank = Callable[[str], str]  # a choice's canonical text -> its sort key
+_END = object()
+
+
+def round_robin(streams: Iterable[Iterator]) -> Iterator:
+    """The streams' items taking turns, each stream dropped once it runs out."""
+    active = list(streams)
+    while active:
+        still = []
+        for stream in active:
+            item = next(stream, _END)
+            if item is not _END:
+                still.append(stream)
+                yield item
+        active = still
 
 
 def concepts(text: str) -> set[tuple[str, str]]:
@@ -43,6 +61,19 @@ class Describer:
         self._simple: dict[str, lf.Ref | None] = {}
         self._descriptions: dict[str, list[lf.Ref]] = {}
         self._conditions: list[lf.Condition] | None = None
+        self._texts: dict[int, tuple[object, str]] = {}  # id -> (node, canonical JSON)
+
+    def text(self, node: lf.Ref | lf.Condition) -> str:
+        """The canonical JSON of a description or condition this describer made (memoised:
+        it ranks them for every source of its world)."""
+        hit = self._texts.get(id(node))
+        if hit is None or hit[0] is not node:
+            hit = self._texts[id(node)] = node, node.model_dump_json()
+        return hit[1]
+
+    def ranked(self, nodes: list, rank: Rank) -> list:
+        """The descriptions or conditions in rank order."""
+        return sorted(nodes, key=lambda node: rank(self.text(node)))
 
     def unique(self, ref: lf.Ref, body: str) -> bool:
         try:
@@ -163,9 +194,12 @@ def _replace(form: lf.Instruction, path: str, command) -> lf.Instruction:
     return form.model_copy(update={"steps": tuple(steps)})
 
 
-def referents(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruction]:
-    """The same commands, with one object, destination or push target described otherwise."""
+def referents(form: lf.Instruction, describer: Describer, rank: Rank
+              ) -> Iterator[lf.Instruction]:
+    """The same commands, with one object, destination or push target described otherwise:
+    each place in turn, its other descriptions in rank order."""
     grounder = describer.grounder
+    streams = []
     for path, command in _commands(form):
         slots = ["object"] + (["destination"] if isinstance(command, lf.Place) else []) + (
             ["toward"] if isinstance(command, lf.Push) else [])
@@ -176,19 +210,27 @@ def referents(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruc
                 body = grounder.resolve(current)
             except GroundingError:
                 continue
-            for ref in describer.descriptions(body):
-                if ref == current:
-                    continue
-                if slot == "destination":
-                    update = {"destination": command.destination.model_copy(
-                        update={"landmark": ref})}
-                else:
-                    update = {slot: ref}
-                yield _replace(form, path, command.model_copy(update=update))
+            others = [ref for ref in describer.descriptions(body) if ref != current]
+            streams.append(_described(form, path, command, slot,
+                                      describer.ranked(others, rank)))
+    return round_robin(streams)
 
 
-def routes(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruction]:
-    """'pass over W' said as 'avoid passing over X' (X beside W in its column), and back."""
+def _described(form: lf.Instruction, path: str, command, slot: str, refs: list[lf.Ref]
+               ) -> Iterator[lf.Instruction]:
+    """The form with the command at `path` naming each ref in its `slot`."""
+    for ref in refs:
+        if slot == "destination":
+            update = {"destination": command.destination.model_copy(update={"landmark": ref})}
+        else:
+            update = {slot: ref}
+        yield _replace(form, path, command.model_copy(update=update))
+
+
+def routes(form: lf.Instruction, describer: Describer, rank: Rank
+           ) -> Iterator[lf.Instruction]:
+    """'pass over W' said as 'avoid passing over X' (X beside W in its column), and back (one
+    choice per command: nothing to rank)."""
     for path, command in _commands(form):
         if not isinstance(command, lf.Place) or len(command.route) != 1:
             continue
@@ -206,8 +248,9 @@ def routes(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instructio
         yield _replace(form, path, command.model_copy(update={"route": (swapped,)}))
 
 
-def orientation(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruction]:
-    """The same final yaw said with the other side facing another way."""
+def orientation(form: lf.Instruction, describer: Describer, rank: Rank
+                ) -> Iterator[lf.Instruction]:
+    """The same final yaw said with the other side facing another way, in rank order."""
     grounder = describer.grounder
     for path, command in _commands(form):
         if not isinstance(command, lf.Place) or command.orientation is None:
@@ -217,24 +260,28 @@ def orientation(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instr
             yaw = grounder.yaw(body, command.orientation)
         except GroundingError:
             continue
-        for side in _SIDES:
-            for facing in _FACINGS:
-                other = lf.Orientation(side=side, facing=facing)
-                if other != command.orientation and grounder.yaw(body, other) == yaw:
-                    yield _replace(form, path, command.model_copy(update={"orientation": other}))
+        others = [(side, facing) for side in _SIDES for facing in _FACINGS]
+        for side, facing in sorted(others, key=lambda pair: rank(" ".join(pair))):
+            other = lf.Orientation(side=side, facing=facing)
+            if other != command.orientation and grounder.yaw(body, other) == yaw:
+                yield _replace(form, path, command.model_copy(update={"orientation": other}))
 
 
-def conditions(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruction]:
-    """Other observable conditions (and their negations) over the same branches."""
+def conditions(form: lf.Instruction, describer: Describer, rank: Rank
+               ) -> Iterator[lf.Instruction]:
+    """Other observable conditions (and their negations) over the same branches, in rank
+    order."""
     if not isinstance(form, lf.Conditional):
         return
-    for variant in describer.conditions():
+    for variant in describer.ranked(describer.conditions(), rank):
         if variant != form.condition:
             yield form.model_copy(update={"condition": variant})
 
 
-def branches(form: lf.Instruction, describer: Describer) -> Iterator[lf.Instruction]:
-    """The branches swapped, with the condition as it was and negated."""
+def branches(form: lf.Instruction, describer: Describer, rank: Rank
+             ) -> Iterator[lf.Instruction]:
+    """The branches swapped, with the condition as it was and negated (in that order: nothing
+    to rank)."""
     if not isinstance(form, lf.Conditional) or form.otherwise is None:
         return
     swapped = form.model_copy(update={"then": form.otherwise, "otherwise": form.then})
