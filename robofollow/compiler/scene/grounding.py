@@ -213,7 +213,10 @@ class Grounder:
         return self.satisfies(self.resolve(condition.subject), condition.property)
 
     # ---------------------------------------------------------------- behaviour
-    def behaviour(self, instruction: lf.Instruction) -> Behaviour:
+    def behaviour(self, instruction: lf.Instruction, every_branch: bool = False) -> Behaviour:
+        """The behaviour the words ask for here; `every_branch`: a conditional's branch not
+        taken must ground too (else its GroundingError, said of that branch), as the rules
+        of a test task ask: a careful reader reads both branches."""
         if not isinstance(instruction, lf.Conditional):
             return Behaviour(steps=self.steps(instruction))
         truth = self.holds(instruction.condition)
@@ -221,7 +224,11 @@ class Grounder:
                         else (instruction.otherwise, instruction.then))
         try:
             other_steps = self.steps(other) if other is not None else ()
-        except GroundingError:
+        except GroundingError as error:
+            if every_branch:
+                raise GroundingError(error.code, f"in the branch not taken "
+                                     f"({'otherwise' if truth else 'then'}), {error.message}",
+                                     error.candidates, error.ref) from None
             other_steps = None
         return Behaviour(steps=self.steps(taken) if taken is not None else (), condition=truth,
                          branch="then" if truth else "otherwise", other=other_steps)

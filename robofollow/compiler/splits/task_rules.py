@@ -11,8 +11,9 @@ leakage       its (layout, form) pair is a training pair; an L2/L3 form is a tra
 level         it is not what its level claims (L0 training pairs, L1 training instructions on
               layouts that look new, L2 training layouts, L3 layouts that look new; a layout
               the L1 or L3 rule declares a repeat, `repeats=allowed`, may look like training)
-no-referent   a description names nothing on the layout
-ambiguous     a description fits several bodies, nominally or at a jitter extreme
+no-referent   a description names nothing on the layout (in either branch of a conditional)
+ambiguous     a description fits several bodies, nominally or at a jitter extreme (in either
+              branch of a conditional, nominally)
 route         a body the route names is not on the way (routes.py)
 infeasible    the expert cannot perform it (feasibility.py)
 repertoire    training does not perform its motions (motions.py)
@@ -210,7 +211,7 @@ class TaskRules:
         if found and not every:
             return result
         try:
-            nominal = grounders[0].behaviour(form)
+            nominal = grounders[0].behaviour(form, every_branch=True)
         except GroundingError as error:
             found.append((grounding_kind(error), grounding_message(error, world)))
             return result
