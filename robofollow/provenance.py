@@ -8,6 +8,7 @@ not)."""
 
 from __future__ import annotations
 
+import os
 import platform
 import subprocess
 import sys
@@ -39,7 +40,9 @@ def _commit() -> str | None:
                               text=True, timeout=10, check=False)
         changes = subprocess.run(["git", "-C", str(root), "status", "--porcelain",
                                   "--untracked-files=no"], capture_output=True, text=True,
-                                 timeout=10, check=False)
+                                 timeout=10, check=False,
+                                 env={**os.environ, "GIT_OPTIONAL_LOCKS": "0"})  # (read only:
+        # a status that refreshes the index takes .git/index.lock, left behind if it is killed)
     except (OSError, subprocess.SubprocessError):
         return None
     if head.returncode != 0:

@@ -4,11 +4,15 @@ branch), and the verdict the rules must give.
 
 - every branch of a conditional grounds, the one not taken too: a reader who meets "the
   cylinder from the right cube" where no cylinder stands on it cannot follow the instruction,
-  whichever branch the layout takes.
+  whichever branch the layout takes;
+- a destination said right after its object does not also read as part of the object's
+  description: "move the small red cube to the right of the large red cylinder", where it
+  stands so already, could ask to move that cube to nowhere said.
 """
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -17,8 +21,11 @@ from robofollow.benchmark.pipeline import compile_specs
 from robofollow.compiler.authoring.spec_loader import load_spec
 from robofollow.compiler.language import lf
 from robofollow.compiler.language.parser import parse
+from robofollow.compiler.scene.grounding import Grounder
+from robofollow.compiler.scene.world import World
 from robofollow.compiler.splits.task_rules import TaskRules, arms_of
 from robofollow.compiler.splits.training import check_training
+from robofollow.compiler.splits.wording_rules import wording_problems
 
 SPECS = Path(__file__).resolve().parent.parent / "specs"
 SCENE4 = load_spec(SPECS / "scene4.rf")
@@ -65,3 +72,41 @@ def test_every_conditional_test_grounds_its_branch_not_taken(compiled):
     assert len(both) > 20
     assert all(t.behaviour.other is not None for t in both), [
         t.id for t in both if t.behaviour.other is None]
+
+
+# (instruction on Scene 2's default layout, whether a careful reader finds a second reading,
+# why)
+DESTINATIONS = [
+    ("Move the small red cube to the right of the large red cylinder.", True,
+     "the small red cube stands to the right of the large red cylinder already: the words also "
+     "read 'move [the small red cube to the right of the large red cylinder]', to nowhere said"),
+    ("Move the small red cube to the left of the large red cylinder.", False,
+     "no small red cube stands to the left of the large red cylinder: the phrase can only say "
+     "where it goes"),
+    ("Pick up the small red cube and place it to the right of the large red cylinder.", False,
+     "'it' takes no description: the phrase is where it goes"),
+]
+
+
+@pytest.mark.parametrize(("instruction", "second_reading", "why"), DESTINATIONS)
+def test_judged_destinations(instruction, second_reading, why):
+    scene = load_spec(SPECS / "scene2.rf").scenes["scene2"]
+    problems = wording_problems(instruction, parse(instruction),
+                                Grounder(World(scene, "default")))
+    assert any(p.startswith("destination:") for p in problems) == second_reading, (
+        why, problems)
+
+
+def test_no_reworded_placement_starts_where_its_destination_says(compiled):
+    """Counted from positions alone: no L2/L3 placement said with its object named right
+    before its destination moves a body that stands so already."""
+    checked = 0
+    for task in compiled.splits.tasks:
+        if task.level not in ("L2", "L3") or re.search(r"\bit\b", task.instruction, re.I):
+            continue
+        world = World(compiled.spec.scenes[task.scene], task.layout)
+        for step in task.behaviour.steps:
+            if step.action == "place" and not step.waypoints:
+                checked += 1
+                assert not world.related(step.source, step.relation, step.target), task.id
+    assert checked

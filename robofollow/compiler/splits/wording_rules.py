@@ -14,6 +14,13 @@ clause     a superlative said after the noun ('the blue cube that is rightmost',
            on the right') picks the body that is also the superlative of the head noun alone
            (the rightmost cube), the other reading of the clause.
 
+A fourth rule keeps a sentence to one reading where its words allow two:
+
+destination  a destination said right after its object ('move the green cylinder on the right
+           side of the blue ball') does not also read as part of the object's description: no
+           body is the object so placed already (else the words could ask to move the green
+           cylinder that is on the right side of the blue ball, to nowhere said).
+
 `wording_problems` applies them to an instruction and its logical form on one layout; the
 split generator rejects a candidate it finds anything in, and the task-list audit reports it.
 """
@@ -46,7 +53,8 @@ def wording_problems(text: str, form: lf.Instruction, grounder: Grounder) -> lis
     except InstructionError as error:
         return [f"unreadable: column {error.column}: {error.message}"]
     return (order_problems(tokens) + vacuous_comparisons(form, grounder)
-            + clause_problems(tokens, form, grounder))
+            + clause_problems(tokens, form, grounder)
+            + destination_problems(tokens, form, grounder))
 
 
 def order_problems(tokens: list[WordToken]) -> list[str]:
@@ -156,4 +164,41 @@ def clause_problems(tokens: list[WordToken], form: lf.Instruction,
                     f"clause: '{notation.ref(ref)}' is scored as {', '.join(restricted)}, "
                     f"but the {constraint.extreme} {ref.noun} is "
                     f"{' or '.join(overall) or 'no body'}")
+    return problems
+
+
+def _places(node: lf.Instruction | lf.Body | None) -> Iterator[lf.Place]:
+    if isinstance(node, lf.Conditional):
+        yield from _places(node.then)
+        yield from _places(node.otherwise)
+    elif isinstance(node, lf.Sequence):
+        for step in node.steps:
+            yield from _places(step)
+    elif isinstance(node, lf.Place):
+        yield node
+
+
+def destination_problems(tokens: list[WordToken], form: lf.Instruction,
+                         grounder: Grounder) -> list[str]:
+    """Placements whose destination, said right after the object, also reads as part of the
+    object's description: some body fits the object's words and stands so already. ('Pick
+    up X and place it ...' says the destination after a pronoun; a route said between them,
+    'over Y', parts them too.)"""
+    if any(token.type == "IT" for token in tokens):
+        return []
+    problems = []
+    for place in _places(form):
+        if any(waypoint.mode == "via" for waypoint in place.route):
+            continue
+        destination = place.destination
+        try:
+            read = lf.Ref(noun=place.object.noun, constraints=(*place.object.constraints, lf.Related(
+                relation=destination.relation, landmark=destination.landmark)))
+            found = grounder.referents(read)
+        except (ValueError, GroundingError):  # a landmark no description relation takes
+            continue
+        if found:
+            problems.append(f"destination: '{notation.ref(place.object)}' then "
+                            f"'{destination.relation} {notation.ref(destination.landmark)}' "
+                            f"also reads as '{notation.ref(read)}', which {', '.join(found)} is")
     return problems
