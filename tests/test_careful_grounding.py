@@ -97,6 +97,22 @@ def test_judged_destinations(instruction, second_reading, why):
         why, problems)
 
 
+def test_the_issues_destination_example_is_said_otherwise(compiled):
+    """'Move the green object on the right side of the blue ball using your right arm' on
+    scene4_2, where the green cylinder stands right of the blue ball already, reads two ways:
+    the rule refuses it, and the generator says that test in a style that names the
+    destination after 'it'."""
+    text = "Move the green object on the right side of the blue ball using your right arm."
+    world = World(SCENE4.scenes["scene4"], "scene4_2")
+    assert any(p.startswith("destination:")
+               for p in wording_problems(text, parse(text), Grounder(world)))
+    task = next(t for t in compiled.splits.tasks
+                if t.id == "scene4/L2/s42_r_unstack_green_cylinder_to_slot6@scene4_2/"
+                           "referents-1ffe00e6")
+    assert task.form == parse(text) and task.instruction != text
+    assert re.search(r"\bit\b", task.instruction)
+
+
 def test_no_reworded_placement_starts_where_its_destination_says(compiled):
     """Counted from positions alone: no L2/L3 placement said with its object named right
     before its destination moves a body that stands so already."""
