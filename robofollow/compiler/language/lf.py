@@ -270,6 +270,19 @@ def to_json(lf: Instruction, indent: int | None = None) -> str:
 _CONSTRAINT_TYPES = get_args(get_args(Constraint)[0])  # the members of the Constraint union
 
 
+def commands(form: Instruction) -> list[tuple[str, Pick | Place | Push]]:
+    """(path, command) for every command of a form; the path names where it sits: "" (the
+    form itself), "step<i>", "then.<path>", "otherwise.<path>"."""
+    if isinstance(form, Conditional):
+        found = [(f"then.{p}", c) for p, c in commands(form.then)]
+        if form.otherwise is not None:
+            found += [(f"otherwise.{p}", c) for p, c in commands(form.otherwise)]
+        return found
+    if isinstance(form, Sequence):
+        return [(f"step{i}", c) for i, c in enumerate(form.steps)]
+    return [("", form)]
+
+
 def constructs(node) -> set[str]:
     """The kinds of description a form uses: constraint types, and 'relation:<name>' for each
     relation (what a wording generator may reuse)."""

@@ -167,17 +167,6 @@ def clause_problems(tokens: list[WordToken], form: lf.Instruction,
     return problems
 
 
-def _places(node: lf.Instruction | lf.Body | None) -> Iterator[lf.Place]:
-    if isinstance(node, lf.Conditional):
-        yield from _places(node.then)
-        yield from _places(node.otherwise)
-    elif isinstance(node, lf.Sequence):
-        for step in node.steps:
-            yield from _places(step)
-    elif isinstance(node, lf.Place):
-        yield node
-
-
 def destination_problems(tokens: list[WordToken], form: lf.Instruction,
                          grounder: Grounder) -> list[str]:
     """Placements whose destination, said right after the object, also reads as part of the
@@ -187,7 +176,8 @@ def destination_problems(tokens: list[WordToken], form: lf.Instruction,
     if any(token.type == "IT" for token in tokens):
         return []
     problems = []
-    for place in _places(form):
+    for place in (command for _, command in lf.commands(form)
+                  if isinstance(command, lf.Place)):
         if any(waypoint.mode == "via" for waypoint in place.route):
             continue
         destination = place.destination

@@ -170,20 +170,8 @@ class Describer:
             return False
 
 
-def _commands(form: lf.Instruction) -> list[tuple[str, lf.Pick | lf.Place | lf.Push]]:
-    """(path, command) for every command of a form; path names where it sits."""
-    if isinstance(form, lf.Conditional):
-        found = [(f"then.{p}", c) for p, c in _commands(form.then)]
-        if form.otherwise is not None:
-            found += [(f"otherwise.{p}", c) for p, c in _commands(form.otherwise)]
-        return found
-    if isinstance(form, lf.Sequence):
-        return [(f"step{i}", c) for i, c in enumerate(form.steps)]
-    return [("", form)]
-
-
 def _replace(form: lf.Instruction, path: str, command) -> lf.Instruction:
-    """The form with the command at `path` replaced."""
+    """The form with the command at `path` (as `lf.commands` names it) replaced."""
     if not path:
         return command
     head, _, rest = path.partition(".")
@@ -200,7 +188,7 @@ def referents(form: lf.Instruction, describer: Describer, rank: Rank
     each place in turn, its other descriptions in rank order."""
     grounder = describer.grounder
     streams = []
-    for path, command in _commands(form):
+    for path, command in lf.commands(form):
         slots = ["object"] + (["destination"] if isinstance(command, lf.Place) else []) + (
             ["toward"] if isinstance(command, lf.Push) else [])
         for slot in slots:
@@ -231,7 +219,7 @@ def routes(form: lf.Instruction, describer: Describer, rank: Rank
            ) -> Iterator[lf.Instruction]:
     """'pass over W' said as 'avoid passing over X' (X beside W in its column), and back (one
     choice per command: nothing to rank)."""
-    for path, command in _commands(form):
+    for path, command in lf.commands(form):
         if not isinstance(command, lf.Place) or len(command.route) != 1:
             continue
         waypoint = command.route[0]
@@ -252,7 +240,7 @@ def orientation(form: lf.Instruction, describer: Describer, rank: Rank
                 ) -> Iterator[lf.Instruction]:
     """The same final yaw said with the other side facing another way, in rank order."""
     grounder = describer.grounder
-    for path, command in _commands(form):
+    for path, command in lf.commands(form):
         if not isinstance(command, lf.Place) or command.orientation is None:
             continue
         try:
