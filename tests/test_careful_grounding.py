@@ -7,7 +7,9 @@ branch), and the verdict the rules must give.
   whichever branch the layout takes;
 - a destination said right after its object does not also read as part of the object's
   description: "move the small red cube to the right of the large red cylinder", where it
-  stands so already, could ask to move that cube to nowhere said.
+  stands so already, could ask to move that cube to nowhere said;
+- "object / item / thing" names any body a reader could mean, fixtures included, and a "one"
+  outside "among" any kind named before it.
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from robofollow.benchmark.pipeline import compile_specs
 from robofollow.compiler.authoring.spec_loader import load_spec
 from robofollow.compiler.language import lf
 from robofollow.compiler.language.parser import parse
-from robofollow.compiler.scene.grounding import Grounder
+from robofollow.compiler.scene.grounding import Grounder, GroundingError
 from robofollow.compiler.scene.world import World
 from robofollow.compiler.splits.task_rules import TaskRules, arms_of
 from robofollow.compiler.splits.training import check_training
@@ -40,6 +42,13 @@ JUDGED = [
      "blue", ("no-referent", "in the branch not taken (then)"),
      "nothing stands on the right cube here, so the branch not taken names a cylinder that is "
      "not there: the reader cannot tell what the instruction means"),
+    ("L2", "scene4_1", "Using your right arm, take the green item.",
+     "s41_r_pick_green_cylinder_top", ("ambiguous", "could be any of bowl, green_cylinder"),
+     "the bowl is exactly the cylinder's green: 'the green item' could be either"),
+    ("L2", "scene4_3", "Use your right arm to pick up the cube on the yellow cylinder and place "
+     "it on the green object.", "s43_r_stack_blue_cube_on_right_cylinder",
+     ("ambiguous", "could be any of bowl, green_cylinder"),
+     "a cube can go on the green cylinder or into the green bowl: the words do not say which"),
 ]
 
 
@@ -97,20 +106,19 @@ def test_judged_destinations(instruction, second_reading, why):
         why, problems)
 
 
-def test_the_issues_destination_example_is_said_otherwise(compiled):
+def test_the_issues_destination_example_is_refused(compiled):
     """'Move the green object on the right side of the blue ball using your right arm' on
     scene4_2, where the green cylinder stands right of the blue ball already, reads two ways:
-    the rule refuses it, and the generator says that test in a style that names the
-    destination after 'it'."""
+    the destination rule refuses it. 'The green object' also fits the green bowl, so no test
+    has that form at all."""
     text = "Move the green object on the right side of the blue ball using your right arm."
     world = World(SCENE4.scenes["scene4"], "scene4_2")
     assert any(p.startswith("destination:")
                for p in wording_problems(text, parse(text), Grounder(world)))
-    task = next(t for t in compiled.splits.tasks
-                if t.id == "scene4/L2/s42_r_unstack_green_cylinder_to_slot6@scene4_2/"
-                           "referents-1ffe00e6")
-    assert task.form == parse(text) and task.instruction != text
-    assert re.search(r"\bit\b", task.instruction)
+    assert not [t.id for t in compiled.splits.tasks if t.form == parse(text)]
+    assert any(re.search(r"\bit\b", t.instruction) and "right of the blue sphere" in
+               t.instruction for t in compiled.splits.tasks
+               if t.origin == "s42_r_unstack_green_cylinder_to_slot6" and t.level == "L2")
 
 
 def test_no_reworded_placement_starts_where_its_destination_says(compiled):
@@ -126,3 +134,51 @@ def test_no_reworded_placement_starts_where_its_destination_says(compiled):
                 checked += 1
                 assert not world.related(step.source, step.relation, step.target), task.id
     assert checked
+
+
+# (instruction, layout, the body a careful reader takes 'the ... one' for, or None where two
+# readings refer, why)
+ONES = [
+    ("Use your right arm to stack the cube from the yellow cylinder on top of the green one.",
+     "scene4_3", "green_cylinder",
+     "'one' is a cube or a cylinder, the kinds named before it: no cube is green, so the green "
+     "cylinder (not the green bowl)"),
+    ("If the yellow cylinder is to the right of the green one, use your left arm to pick up the "
+     "blue sphere; otherwise use your left arm to pick up the red sphere.", "scene4_1",
+     "green_cylinder", "only a cylinder is named before 'the green one'"),
+    ("Use your right arm to pick up the green one.", "scene4_1", None,
+     "nothing is named before it: the green bowl and the green cylinder both fit"),
+]
+
+
+@pytest.mark.parametrize(("instruction", "layout", "body", "why"), ONES)
+def test_judged_ones(instruction, layout, body, why):
+    grounder = Grounder(World(SCENE4.scenes["scene4"], layout))
+    form = parse(instruction)
+    if body is None:
+        with pytest.raises(GroundingError, match="ambiguous|could be any"):
+            grounder.behaviour(form)
+        return
+    grounder.behaviour(form, every_branch=True)
+    condition = getattr(form, "condition", None)
+    if condition is not None:
+        assert grounder.resolve(condition.property.landmark) == body, why
+    else:
+        assert grounder.resolve(form.destination.landmark) == body, why
+
+
+_BARE = re.compile(r"\bthe (\w+) (?:object|item|thing)\b(?! (?:that|which|on|in|to|at|between|"
+                   r"closest|nearest|farthest|under|below|above|behind|next))")
+
+
+def test_no_test_names_a_colour_a_fixture_shares_by_object_alone(compiled):
+    """Read from the words and the layouts alone: no test says 'the <colour> object / item /
+    thing' with nothing more where a fixture of that colour stands."""
+    checked = 0
+    for task in compiled.splits.tasks:
+        scene = compiled.spec.scenes[task.scene]
+        fixtures = {body.color for body in scene.bodies.values() if body.fixture}
+        for colour in _BARE.findall(task.instruction):
+            checked += 1
+            assert colour not in fixtures, (task.id, task.instruction)
+    assert checked >= 2

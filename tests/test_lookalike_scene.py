@@ -56,12 +56,12 @@ scene scene5 "Look-alike objects and labels" {
     task s5_pickup_red_cube on default {
         "Use your left arm to pick up the red cube."
         "Grasp the red cube with your left arm."
-        "Use your left arm to pick up the red object."
+        "Use your left arm to pick up the red block."
         expect pick left red_cube
     }
     task s5_pickup_blue_cylinder on default {
         "Use your left arm to pick up the blue cylinder."
-        "Use your left arm to pick up the blue object."
+        "Grasp the blue cylinder with your left arm."
         expect pick left blue_cylinder
     }
     task s5_pickup_left_yellow_cube on default {

@@ -13,13 +13,13 @@ from hypothesis import strategies as st
 
 from robofollow.cli import main
 from robofollow.compiler.language import lf
+from robofollow.compiler.scene.grounding import Grounder
 from robofollow.compiler.scene.world import EXTREME_MARGIN, World, sample_offsets
 from robofollow.resources import builtin_specs
 from robofollow.vqa.paper import QA20, answer_all
 from robofollow.vqa.questions import (
     RELATION_WORDS,
     Ask,
-    QuestionGrounder,
     questions,
     unique_answer,
 )
@@ -118,7 +118,7 @@ def _the(color: str, noun: str) -> lf.Ref:
 
 
 def test_ambiguous_questions_are_rejected():
-    grounder = QuestionGrounder(DEFAULT)
+    grounder = Grounder(DEFAULT)
     # the blue cylinder and the red cube both lie to the right of the blue cube
     assert unique_answer(grounder, Ask("which_side", "right_of", _the("blue", "cube"))) is None
     texts = {q.question for q in questions(DEFAULT)}

@@ -11,13 +11,12 @@ from __future__ import annotations
 import math
 
 from robofollow.compiler.language import lf
-from robofollow.compiler.scene.grounding import GroundingError
+from robofollow.compiler.scene.grounding import Grounder, GroundingError
 from robofollow.compiler.scene.world import EXTREME_MARGIN, World
 from robofollow.vqa.answers import Expected
 from robofollow.vqa.questions import (
     Ask,
     Question,
-    QuestionGrounder,
     expected,
     referents,
 )
@@ -75,7 +74,7 @@ QA20: tuple[tuple[str, Ask], ...] = (
 def answer_all(world: World) -> list[tuple[Question, str | None]]:
     """Each QA-20 question with its answer in `world`, and a note where the grounding alone
     does not single the answer out."""
-    grounder = QuestionGrounder(world)
+    grounder = Grounder(world)
     answered = []
     for number, (text, ask) in enumerate(QA20, start=1):
         found = referents(grounder, ask)
@@ -91,7 +90,7 @@ def answer_all(world: World) -> list[tuple[Question, str | None]]:
     return answered
 
 
-def _nearest(grounder: QuestionGrounder, ask: Ask, found: list[str]) -> tuple[list[str], str]:
+def _nearest(grounder: Grounder, ask: Ask, found: list[str]) -> tuple[list[str], str]:
     world = grounder.world
     anchor = world.poses[grounder.resolve(ask.landmark)]
     distance = {b: math.hypot(world.poses[b].x - anchor.x, world.poses[b].y - anchor.y)

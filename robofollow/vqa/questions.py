@@ -55,13 +55,6 @@ class Ask:
     color: str | None = None
 
 
-class QuestionGrounder(Grounder):
-    """The compiler's grounding, with "object" naming any body on the table."""
-
-    def domain(self, noun: str) -> list[str]:
-        return list(self.world.bodies) if noun == "object" else super().domain(noun)
-
-
 def plural(noun: str) -> str:
     return KIND_WORDS.get(noun, noun) + "s"
 
@@ -186,7 +179,7 @@ def asks(world: World, grounder: Grounder) -> Iterator[Ask]:
 
 def questions(world: World) -> list[Question]:
     """The uniquely answerable questions about a world, each once, in a fixed order."""
-    grounder = QuestionGrounder(world)
+    grounder = Grounder(world)
     found: dict[str, Question] = {}
     for ask in asks(world, grounder):
         answer = unique_answer(grounder, ask)

@@ -9,7 +9,8 @@ ones into the reference. Errors point at the word that causes them.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, fields, is_dataclass
+from typing import get_args
 
 from pydantic import ValidationError
 
@@ -22,6 +23,7 @@ _NOUN_PARENTS = {"cube": "block", "slab": "block"}
 CONTAINERS = frozenset({"bowl"})
 _SIDE_RELATIONS = {"left": "left_of", "right": "right_of"}
 _SIDE_EXTREMES = {"left": "leftmost", "right": "rightmost"}
+_KINDS = frozenset(get_args(lf.Noun)) - {"object", "block", "table"}  # what a body can be
 
 # (preposition, target shape) -> (meaning kind, relation or mode)
 _NP_PREPOSITIONS = {
@@ -68,6 +70,11 @@ class ReferringExpressions:
     def __init__(self, text: str):
         self.text = text
         self.domain: lf.Ref | None = None  # 'among the <nouns>': what a later 'one' stands for
+        self.said: list[tuple[int, str]] = []  # (column, noun) of every noun the text names
+
+    def read_nouns(self, syntax) -> None:
+        """Note the nouns an instruction's syntax names, for the 'one's that follow them."""
+        self.said = sorted(_nouns_named(syntax))
 
     def fail(self, column: int, message: str) -> UnsupportedConstructError:
         return UnsupportedConstructError(message, text=self.text, column=column,
@@ -115,12 +122,31 @@ class ReferringExpressions:
                                        "mentioned before it")
         constraints = [self.premod(p) for p in np.premods]
         domain = self.domain
+        if np.head == "one" and domain is None:
+            domain = self.antecedent(np.column)
         if np.head == "one" and domain is not None:
             constraints.extend(domain.constraints)
         try:
             return self.extend(self.head_noun(np, domain), constraints, meanings)
         except ValueError as error:  # e.g. two ordinals for one object
             raise self.fail(np.column, _reason(error)) from None
+
+    def antecedent(self, column: int) -> lf.Ref | None:
+        """What a 'one' outside 'among' stands for: a body of any kind named before it (a
+        reader takes whichever reading refers; two that refer make it ambiguous), or any
+        body when the text names no kind before it, or opens with a 'one' (which stands for
+        any body, and so may the 'one's after it)."""
+        said = [noun for at, noun in self.said if at < column]
+        if not said or said[0] == "one" or "object" in said:
+            return None
+        named = set(said) - {"one"}
+        if "block" in named:
+            named |= {"cube", "slab"}
+        for noun in ("block", *sorted(named)):
+            if named == ({"cube", "slab"} if noun == "block" else {noun}):
+                return lf.Ref(noun=noun)
+        return lf.Ref(noun="object", constraints=tuple(
+            lf.NotKind(noun=kind) for kind in sorted(_KINDS - named)))
 
     def simple(self, np: NP) -> lf.Ref:
         """A landmark: a noun phrase described by its own words only."""
@@ -282,6 +308,23 @@ class ReferringExpressions:
         if kind == "source":
             relation = "on"
         return Meaning(kind, pp.column, relation, landmark)
+
+
+def _nouns_named(node) -> list[tuple[int, str]]:
+    """(column, noun) of every noun phrase in a syntax tree, 'one' and 'the rightmost ball'
+    included, the table left out."""
+    if isinstance(node, (list, tuple)):
+        return [named for item in node for named in _nouns_named(item)]
+    if not is_dataclass(node):
+        return []
+    found = []
+    if isinstance(node, NP) and node.head != "table":
+        found.append((node.column, node.head))
+    if isinstance(node, Predicate) and node.noun not in (None, "one", "table"):
+        found.append((node.column, node.noun))
+    for field in fields(node):
+        found.extend(_nouns_named(getattr(node, field.name)))
+    return found
 
 
 def _reason(error: ValueError) -> str:

@@ -85,6 +85,7 @@ class Semantics(ReferringExpressions):
 
     # ---------------------------------------------------------------- entry
     def instruction(self, syntax) -> lf.Instruction:
+        self.read_nouns(syntax)
         if isinstance(syntax, ConditionalPhrase):
             return self.conditional(syntax)
         return self.steps(syntax, focus=None)

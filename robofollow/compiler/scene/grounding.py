@@ -41,12 +41,12 @@ class GroundingError(RoboFollowError):
 
 
 def kind_matches(world: World, body: str, noun: str) -> bool:
-    """Whether a body can be called by a noun ('object' is any movable body)."""
+    """Whether a body can be called by a noun ("object" is any body, fixtures included)."""
     if body == TABLE:
         return noun == TABLE
     spec = world.bodies[body]
     if noun == "object":
-        return not spec.fixture
+        return True
     if noun == "block":
         return spec.kind in ("cube", "slab")
     return spec.kind == noun
