@@ -120,8 +120,9 @@ def test_every_kind_of_finding_is_reported(findings):
     ("typo", "parse", "column 22: unknown word 'pik'"),
     ("nothing", "no-referent", "the layout's cubes: large_blue_cube, small_red_cube"),
     ("two-cubes", "ambiguous", "large_blue_cube at (-14.0, -13.0) cm"),
-    ("jitter", "ambiguous", "at jitter extreme 5: object[right_of(sphere[red])] could be any of "
-                            "yellow_block_1, green_sphere"),
+    ("jitter", "ambiguous", "at jitter extreme 5: object[right_of(sphere[red])]: green_sphere "
+                            "stands 43° off the right_of direction of red_sphere, too near the "
+                            "45° edge to tell"),
     ("swapped", "expectation", "the words select target yellow_bowl; the expectation says "
                                "green_bowl"),
     ("other-arm", "repertoire", "pick right large_red_cylinder: no training step moves alike; "

@@ -33,7 +33,7 @@ def _labels(task_id: str) -> dict:
     # "the block to the right of the red ball" is another block on the changed layout
     ("scene1/L1/pickup_yellow_block_1_right@scene1_1", "moved", True, "another block"),
     # the reworded pickup of the right cube on scene2_1: the same cube, in the same place
-    ("scene2/L3/pickup_right_cube@scene2_1/referents-30da6679", "as-trained", False,
+    ("scene2/L3/pickup_right_cube@scene2_1/referents-bfa87e46", "as-trained", False,
      "nothing it handles moved"),
 ])
 def test_judged_labels(task_id, motion, object_moved, why):

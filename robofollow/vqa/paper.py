@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from robofollow.compiler.language import lf
-from robofollow.compiler.scene.grounding import Grounder, GroundingError
+from robofollow.compiler.scene.grounding import Grounder, GroundingError, Unclear
 from robofollow.compiler.scene.world import EXTREME_MARGIN, World
 from robofollow.vqa.answers import Expected
 from robofollow.vqa.questions import (
@@ -77,10 +77,10 @@ def answer_all(world: World) -> list[tuple[Question, str | None]]:
     grounder = Grounder(world)
     answered = []
     for number, (text, ask) in enumerate(QA20, start=1):
-        found = referents(grounder, ask)
-        note = None
+        found, note = _candidates(grounder, ask)
         if len(found) > 1 and ask.landmark is not None:
-            found, note = _nearest(grounder, ask, found)
+            found, nearest = _nearest(grounder, ask, found)
+            note = nearest if note is None else f"{note}; {nearest}"
         elif ask.template not in ("pair", "relative", "property") and len(found) != 1:
             raise GroundingError("no-referent", f"QA-20 question {number} has no answer in "
                                                 f"layout {world.layout.name}")
@@ -88,6 +88,17 @@ def answer_all(world: World) -> list[tuple[Question, str | None]]:
         answered.append((Question(id=f"qa20-{number:02d}", template=ask.template, question=text,
                                   answer=answer.text, expected=answer), note))
     return answered
+
+
+def _candidates(grounder: Grounder, ask: Ask) -> tuple[list[str], str | None]:
+    """The bodies a question can be about, and a note where one stands at its direction's
+    edge (the grounding calls that unclear; the question still has the paper's answer)."""
+    try:
+        return referents(grounder, ask), None
+    except Unclear as error:
+        world, landmark = grounder.world, grounder.resolve(ask.landmark)
+        return [b for b in grounder.domain(ask.noun) if b != landmark and (
+            b in error.candidates or world.related(b, ask.relation, landmark))], error.message
 
 
 def _nearest(grounder: Grounder, ask: Ask, found: list[str]) -> tuple[list[str], str]:

@@ -15,11 +15,14 @@ from pydantic import BaseModel
 from robofollow.compiler.language import lf, notation
 from robofollow.compiler.scene.behaviour import Behaviour, Step
 from robofollow.compiler.scene.world import (
+    DIRECTION_MARGIN_DEG,
+    DIRECTIONS,
     EXTREME_AXES,
     EXTREME_MARGIN,
     NEAREST_MARGIN,
     ORDINAL_AXES,
     ORDINAL_MARGIN,
+    RELATION_CONE_DEG,
     SIZE_MARGIN,
     World,
 )
@@ -38,6 +41,10 @@ class GroundingError(RoboFollowError):
         self.message = message
         self.candidates = candidates
         self.ref = ref  # the description that failed, when one did
+
+
+class Unclear(GroundingError):
+    """A body near a direction's edge: a viewer cannot tell whether the relation holds."""
 
 
 def kind_matches(world: World, body: str, noun: str) -> bool:
@@ -79,28 +86,69 @@ class Grounder:
         return list(self._domains[noun])
 
     def referents(self, ref: lf.Ref) -> list[str]:
-        """Every body the description fits (memoised: a world does not change)."""
+        """Every body the description, said with 'the', can mean (memoised: a world does not
+        change): of several in its direction, the one squarely there (`squarely`), even where
+        the others stand near the direction's edge; else such a body makes it ambiguous."""
         cached = self._referents.get(id(ref))
         if cached is None or cached[0] is not ref:
             cached = self._still.get(id(ref))
             if cached is None or cached[0] is not ref:
-                cached = (ref, tuple(self._find(ref)))
+                cached = (ref, tuple(self._definite(ref)))
                 if _reads_no_position(ref):
                     self._still[id(ref)] = cached
             self._referents[id(ref)] = cached
         return list(cached[1])
 
-    def _find(self, ref: lf.Ref) -> list[str]:
-        candidates = self.domain(ref.noun)
-        comparatives = []
-        for constraint in ref.constraints:
-            if isinstance(constraint, lf.COMPARATIVES):
-                comparatives.append(constraint)
-            else:
-                candidates = [b for b in candidates if self.satisfies(b, constraint)]
+    def _definite(self, ref: lf.Ref) -> list[str]:
+        clear, unclear = self._sorted(ref)
+        if any(isinstance(c, lf.COMPARATIVES) for c in ref.constraints):
+            return self.fitting(ref, (clear, unclear))
+        chosen = self.squarely([*clear, *unclear], ref)
+        if len(chosen) == 1 and chosen[0] in clear:
+            return chosen
+        if unclear:
+            raise next(iter(unclear.values()))
+        return clear
+
+    def fitting(self, ref: lf.Ref, sorted_: tuple | None = None) -> list[str]:
+        """Every body the description fits ('there is a cube to the left of the bowl'); where
+        none clearly does but one stands near a direction's edge, or a comparative would
+        choose among them, it is ambiguous."""
+        clear, unclear = sorted_ or self._sorted(ref)
+        comparatives = [c for c in ref.constraints if isinstance(c, lf.COMPARATIVES)]
+        if unclear and (comparatives or not clear):
+            raise next(iter(unclear.values()))
         for constraint in comparatives:
-            candidates = self.compare(candidates, constraint, ref)
-        return candidates
+            clear = self.compare(clear, constraint, ref)
+        return clear
+
+    def _sorted(self, ref: lf.Ref) -> tuple[list[str], dict[str, Unclear]]:
+        """The bodies that fit every plain constraint, and those that fit all but stand near
+        a direction's edge (with why)."""
+        plain = [c for c in ref.constraints if not isinstance(c, lf.COMPARATIVES)]
+        clear, unclear = [], {}
+        for body in self.domain(ref.noun):
+            try:
+                if self._fits(body, plain):
+                    clear.append(body)
+            except Unclear as error:
+                unclear[body] = Unclear("ambiguous", f"{_describe(ref)}: {error.message}",
+                                        (body,), ref)
+        return clear, unclear
+
+    def _fits(self, body: str, constraints: list[lf.Constraint]) -> bool:
+        """Whether a body fits every constraint (Unclear where the only doubt is a direction's
+        edge)."""
+        unclear = None
+        for constraint in constraints:
+            try:
+                if not self.satisfies(body, constraint):
+                    return False
+            except Unclear as error:
+                unclear = error
+        if unclear is not None:
+            raise unclear
+        return True
 
     def resolve(self, ref: lf.Ref) -> str:
         """The one body a description picks out."""
@@ -133,11 +181,46 @@ class Grounder:
             if landmark == TABLE:
                 relation = "touching" if relation in ("on", "touching") else relation
                 holds = relation == "touching" and self.world.related(body, relation, TABLE)
+            elif relation in DIRECTIONS:
+                holds = self.direction(body, relation, landmark)
             else:
                 holds = self.world.related(body, relation, landmark)
             return holds != constraint.negated
         # a comparative on one body: is it the extreme among the bodies of its kind?
         return body in self.compare(self.domain(self._noun_of(body)), constraint, None)
+
+    def squarely(self, found: list[str], ref: lf.Ref) -> list[str]:
+        """Of several bodies in a description's direction ("the block to the right of the red
+        ball"), the one a viewer takes: no less square to the direction and no farther than
+        each other, and ahead by DIRECTION_MARGIN_DEG or NEAREST_MARGIN, for every direction
+        the description names; else all."""
+        directions = [c for c in ref.constraints if isinstance(c, lf.Related)
+                      and c.relation in DIRECTIONS and not c.negated]
+        if len(found) < 2 or not directions:
+            return found
+        views = []
+        for constraint in directions:
+            landmark = self.resolve(constraint.landmark)
+            views.append({b: (self.world.off_axis(b, constraint.relation, landmark),
+                              self.world.distance(b, landmark)) for b in found})
+        for body in found:
+            if all(_ahead(view[body], view[other]) for view in views
+                   for other in found if other != body):
+                return [body]
+        return found
+
+    def direction(self, body: str, relation: str, landmark: str) -> bool:
+        """Whether `body <relation> landmark` holds as a viewer sees it: within
+        RELATION_CONE_DEG of the direction at any distance. Within DIRECTION_MARGIN_DEG of
+        that edge it is Unclear."""
+        angle = self.world.off_axis(body, relation, landmark)
+        if angle is None:
+            return False
+        if abs(angle - RELATION_CONE_DEG) < DIRECTION_MARGIN_DEG:
+            raise Unclear("ambiguous", f"{body} stands {angle:.0f}° off the {relation} direction "
+                                       f"of {landmark}, too near the {RELATION_CONE_DEG:.0f}° edge "
+                                       "to tell", (body,))
+        return angle < RELATION_CONE_DEG
 
     def _noun_of(self, body: str) -> str:
         return self.world.bodies[body].kind
@@ -209,7 +292,7 @@ class Grounder:
     # ---------------------------------------------------------------- conditions
     def holds(self, condition: lf.Condition) -> bool:
         if isinstance(condition, lf.Exists):
-            return bool(self.referents(condition.ref)) != condition.negated
+            return bool(self.fitting(condition.ref)) != condition.negated
         return self.satisfies(self.resolve(condition.subject), condition.property)
 
     # ---------------------------------------------------------------- behaviour
@@ -281,6 +364,15 @@ class Grounder:
         # the short sides face along the long axis; the long sides across it
         wants_long_axis_on_y = facing_on_y == (orientation.side == "short")
         return 0.0 if wants_long_axis_on_y == long_axis_on_y else 90.0
+
+
+def _ahead(seen: tuple[float, float], other: tuple[float, float]) -> bool:
+    """Whether a body seen at (angle off a direction, distance) is the one a viewer takes over
+    another: no less square and no farther, and clearly ahead in one of them."""
+    (angle, distance), (their_angle, their_distance) = seen, other
+    return (angle <= their_angle and distance <= their_distance
+            and (their_angle - angle >= DIRECTION_MARGIN_DEG
+                 or their_distance - distance >= NEAREST_MARGIN))
 
 
 @dataclass(frozen=True)

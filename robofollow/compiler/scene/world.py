@@ -13,7 +13,8 @@ from dataclasses import dataclass
 from robofollow.compiler.scene.spec import Body, Scene
 
 RELATION_CONE_DEG = 45.0  # deg: a direction relation holds within this angle of its axis
-RELATION_RANGE = 0.20  # m: how far "to the left of X" reaches when it picks out an object
+DIRECTION_MARGIN_DEG = 10.0  # deg: this near the cone's edge a viewer could read it either way
+RELATION_RANGE = 0.20  # m: how far "next to X" reaches, and "to the left of X" as a destination
 ON_XY_TOLERANCE = 0.02  # m: centre offset that still counts as "on top of"
 CONTACT_TOLERANCE = 0.005  # m: gap that still counts as resting on / touching
 EXTREME_MARGIN = 0.02  # m: the leftmost (...) object leads the runner-up by at least this
@@ -119,12 +120,26 @@ class World:
             return (bowl.kind == "bowl"
                     and math.hypot(pa.x - pb.x, pa.y - pb.y) <= bowl.half_extents[0]
                     and self.bottom(a) < self.top(b))
-        if self._stacked(a, b):  # beside, not on or under: a support is no neighbour
-            return False
-        distance = math.hypot(pa.x - pb.x, pa.y - pb.y)
         if relation == "next_to":
-            return 0 < distance <= RELATION_RANGE
-        return in_cone(pa.x - pb.x, pa.y - pb.y, DIRECTIONS[relation]) and distance <= RELATION_RANGE
+            return (not self._stacked(a, b)
+                    and 0 < math.hypot(pa.x - pb.x, pa.y - pb.y) <= RELATION_RANGE)
+        angle = self.off_axis(a, relation, b)
+        return angle is not None and angle <= RELATION_CONE_DEG
+
+    def off_axis(self, a: str, relation: str, b: str) -> float | None:
+        """How far (deg) `a` stands off the direction `relation` names from `b`, as a viewer
+        sees it: at any distance, and None where one rests on or in the other (a support is
+        no neighbour) or they stand at one spot."""
+        if self._stacked(a, b):
+            return None
+        pa, pb = self.poses[a], self.poses[b]
+        dx, dy = pa.x - pb.x, pa.y - pb.y
+        length = math.hypot(dx, dy)
+        if length < 1e-9:
+            return None
+        direction = DIRECTIONS[relation]
+        cosine = (dx * direction[0] + dy * direction[1]) / length
+        return math.degrees(math.acos(max(-1.0, min(1.0, cosine))))
 
     def _stacked(self, a: str, b: str) -> bool:
         """Whether one body rests on or in the other (as measured, settled bodies included)."""

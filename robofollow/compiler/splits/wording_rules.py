@@ -34,7 +34,7 @@ from pydantic import BaseModel
 
 from robofollow.compiler.language import lf, notation
 from robofollow.compiler.language.lexicon import WordToken, tokenize
-from robofollow.compiler.scene.grounding import Grounder, GroundingError
+from robofollow.compiler.scene.grounding import Grounder, GroundingError, Unclear
 from robofollow.errors import InstructionError
 
 # English premodifier order: lower ranks come first
@@ -184,11 +184,13 @@ def destination_problems(tokens: list[WordToken], form: lf.Instruction,
         try:
             read = lf.Ref(noun=place.object.noun, constraints=(*place.object.constraints, lf.Related(
                 relation=destination.relation, landmark=destination.landmark)))
-            found = grounder.referents(read)
+            found = ', '.join(grounder.fitting(read))
+        except Unclear as error:  # a body a viewer could see standing there already
+            found = f"{', '.join(error.candidates)} may be ({error.message})"
         except (ValueError, GroundingError):  # a landmark no description relation takes
             continue
         if found:
             problems.append(f"destination: '{notation.ref(place.object)}' then "
                             f"'{destination.relation} {notation.ref(destination.landmark)}' "
-                            f"also reads as '{notation.ref(read)}', which {', '.join(found)} is")
+                            f"also reads as '{notation.ref(read)}', which {found} is")
     return problems
