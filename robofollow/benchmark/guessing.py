@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from collections import defaultdict
 from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
 
 from robofollow.compiler.scene.behaviour import Behaviour
 from robofollow.compiler.scene.spec import LEVELS, Scene, Spec, scene_behaviours
@@ -43,31 +44,55 @@ def blind_best(spec: Spec, training: Mapping[str, Behaviour],
     return found
 
 
+@dataclass(frozen=True)
+class LayoutGuess:
+    """The best blind guess on one layout of a cell: sums over the cell's tests there."""
+    tests: int
+    label: str  # the training behaviour it performs
+    intent: float  # Intent earned (0-1 a test), summed
+    completed: float  # tests it completes
+    chance_intent: float  # a uniform guess's, summed
+    chance_completed: float
+    earning: tuple[str, ...]  # the tests it earns at least EARNING of the Intent on
+
+
+def layout_guess(scene: Scene, candidates: Mapping[str, Behaviour], layout: str,
+                 asked: list[TestTask]) -> LayoutGuess | None:
+    """The guess that earns most Intent on a layout's tests (None where the layout allows no
+    training behaviour)."""
+    labels = available_behaviours(World(scene, layout), candidates)
+    table = earnings([task.behaviour for task in asked], [candidates[label] for label in labels])
+    if not table:
+        return None
+    intents = [sum(intent for intent, _ in row) for row in table]
+    best = intents.index(max(intents))
+    return LayoutGuess(
+        tests=len(asked), label=labels[best], intent=intents[best],
+        completed=max(float(sum(done for _, done in row)) for row in table),
+        chance_intent=sum(intents) / len(table),
+        chance_completed=sum(done for row in table for _, done in row) / len(table),
+        earning=tuple(task.id for task, (intent, _) in zip(asked, table[best], strict=True)
+                      if intent >= EARNING))
+
+
 def _cell(scene: Scene, candidates: Mapping[str, Behaviour],
           layouts: Mapping[str, list[TestTask]]) -> dict:
     """One cell: the sums over its layouts, then per-task means (0-100)."""
     totals = {"IS": 0.0, "CR": 0.0, "chance_IS": 0.0, "chance_CR": 0.0}
     shown = []
     for layout, asked in layouts.items():
-        labels = available_behaviours(World(scene, layout), candidates)
-        table = earnings([task.behaviour for task in asked],
-                         [candidates[label] for label in labels])
-        if not table:
+        guess = layout_guess(scene, candidates, layout, asked)
+        if guess is None:
             continue
-        intents = [sum(intent for intent, _ in row) for row in table]
-        most, chance = max(intents), sum(intents) / len(table)  # chance: a uniform guess
-        totals["IS"] += most
-        totals["CR"] += max(float(sum(done for _, done in row)) for row in table)
-        totals["chance_IS"] += chance
-        totals["chance_CR"] += sum(done for row in table for _, done in row) / len(table)
-        best = intents.index(most)
-        earning = [task.id for task, (intent, _) in zip(asked, table[best], strict=True)
-                   if intent >= EARNING]
-        shown.append((most - chance, {
-            "layout": layout, "guess": labels[best], "tests": len(asked),
-            "guess_IS": round(100 * most / len(asked), 1),
-            "chance_IS": round(100 * chance / len(asked), 1),
-            "earning": len(earning), "earning_tests": earning[:NAMED_TESTS]}))
+        totals["IS"] += guess.intent
+        totals["CR"] += guess.completed
+        totals["chance_IS"] += guess.chance_intent
+        totals["chance_CR"] += guess.chance_completed
+        shown.append((guess.intent - guess.chance_intent, {
+            "layout": layout, "guess": guess.label, "tests": len(asked),
+            "guess_IS": round(100 * guess.intent / len(asked), 1),
+            "chance_IS": round(100 * guess.chance_intent / len(asked), 1),
+            "earning": len(guess.earning), "earning_tests": list(guess.earning[:NAMED_TESTS])}))
     count = sum(len(asked) for asked in layouts.values())
     cell: dict = {metric: round(100 * value / count, 1) for metric, value in totals.items()}
     cell["layouts"] = [entry for _, entry in sorted(shown, key=lambda pair: -pair[0])]

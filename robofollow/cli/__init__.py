@@ -13,6 +13,7 @@ import sys
 from robofollow.cli.compile import add_audit, add_compile
 from robofollow.cli.data import add_dataset, add_generate
 from robofollow.cli.eval import add_compare, add_eval, add_merge, add_report
+from robofollow.cli.layouts import add_propose_layouts
 from robofollow.cli.parse import add_parse
 from robofollow.cli.release import add_release
 from robofollow.cli.reproduce import add_reproduce
@@ -48,9 +49,9 @@ def parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action=_Version, nargs=0,
                         help="show the program's version number and exit")
     commands = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for add in (add_parse, add_compile, add_audit, add_score, add_expert, add_render, add_eval,
-                add_report, add_compare, add_merge, add_reproduce, add_release,
-                add_serve, add_generate, add_vqa, add_train, add_dataset):
+    for add in (add_parse, add_compile, add_audit, add_propose_layouts, add_score, add_expert,
+                add_render, add_eval, add_report, add_compare, add_merge, add_reproduce,
+                add_release, add_serve, add_generate, add_vqa, add_train, add_dataset):
         add(commands)
     return parser
 
